@@ -1,0 +1,174 @@
+"""Command line: argument parsing only; the work is done by the library modules."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from . import __version__
+
+
+class CliError(Exception):
+    """A failure to report to the user in one line, with a non-zero exit status."""
+
+
+def _known_errors():
+    from .parameters import ParameterTableError
+    from .problem import ProblemError
+    from .recording import RecordingError
+
+    return (RecordingError, ParameterTableError, ProblemError, CliError)
+
+
+# --------------------------------------------------------------------------- commands
+def cmd_simulate(args) -> int:
+    from .problem import load_problem
+    from .simulate import simulate, write_simulation
+
+    problem = load_problem(args.problem)
+    changes = {}
+    if args.start_attitude_deg is not None:
+        changes["start_attitude_deg"] = args.start_attitude_deg
+    if args.quantize:
+        changes["quantize"] = True
+    if changes:
+        problem = problem.with_changes(**changes)
+    t0 = time.perf_counter()
+    sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name)
+    path = write_simulation(sim, args.out)
+    print(f"wrote {path} (+ .csv, .truth.csv): {len(sim.recording.time)} samples, "
+          f"{time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def cmd_validate(args) -> int:
+    from .recording import read_recording
+    from .report import recording_summary
+
+    rec = read_recording(args.recording)
+    print(recording_summary(rec))
+    print("valid sins-recording/1")
+    return 0
+
+
+def cmd_rough(args) -> int:
+    from .initial import rough_parameters
+    from .parameters import write_table
+    from .recording import read_recording
+
+    rec = read_recording(args.recording)
+    path = write_table(args.out, rough_parameters(rec))
+    print(f"wrote {path}")
+    return 0
+
+
+def cmd_navigate(args) -> int:
+    from .initial import rough_parameters
+    from .parameters import read_table
+    from .recording import read_recording
+    from .report import plot_navigation, static_velocity_table, write_frame
+    from .strapdown import navigate
+
+    rec = read_recording(args.recording)
+    runs = {}
+    if args.params:
+        for path in args.params:
+            runs[Path(path).stem] = read_table(path).values
+    else:
+        runs["rough initial values"] = rough_parameters(rec).values
+    out = Path(args.out)
+    navs = {}
+    for label, values in runs.items():
+        t0 = time.perf_counter()
+        navs[label] = navigate(rec, values)
+        print(f"navigated {rec.name} with {label} in {time.perf_counter() - t0:.2f} s")
+        table = static_velocity_table(rec, navs[label])
+        write_frame(table, out / f"{rec.name}-{_slug(label)}-static", f"{rec.name}: static segments, {label}")
+        print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    plot = plot_navigation(rec, navs, out / f"{rec.name}-velocity.png")
+    print(f"wrote {plot}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    """Simulate the default problem and run the main job into ``results/``."""
+    from .initial import rough_parameters
+    from .problem import load_problem
+    from .report import plot_navigation
+    from .simulate import simulate, write_simulation
+    from .strapdown import navigate
+
+    out = Path(args.out)
+    problem = load_problem(args.problem)
+    t0 = time.perf_counter()
+    sim = simulate(problem, seed=args.seed)
+    rec_path = write_simulation(sim, out / "recordings")
+    print(f"simulated {problem.name} (seed {args.seed}): {rec_path} in {time.perf_counter() - t0:.1f} s")
+    rec = sim.recording
+    runs = {"rough initial values": navigate(rec, rough_parameters(rec).values),
+            "truth": navigate(rec, sim.truth.values)}
+    print(f"wrote {plot_navigation(rec, runs, out / f'{rec.name}-navigation.png')}")
+    return 0
+
+
+def _slug(text: str) -> str:
+    return "".join(c if c.isalnum() else "-" for c in text).strip("-").lower()
+
+
+# --------------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="casadi-sins",
+        description="System-level calibration of strapdown inertial navigation systems (21-parameter model).")
+    parser.add_argument("--version", action="version", version=f"casadi-sins {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of deviations and noise (default 0)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--name", help="recording name (default PROBLEM-seedN)")
+    p.add_argument("--no-noise", action="store_true", help="leave out the sensor noise")
+    p.add_argument("--quantize", action="store_true", help="integer pulses, remainder carried")
+    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("validate", help="read and check a recording; print its summary")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("rough", help="the paper's rough initial parameters of a recording")
+    p.add_argument("recording")
+    p.add_argument("--out", required=True, help="parameter table CSV to write")
+    p.set_defaults(func=cmd_rough)
+
+    p = sub.add_parser("navigate", help="navigate a recording's groups; velocity per static segment and a plot")
+    p.add_argument("recording")
+    p.add_argument("--params", nargs="*", help="parameter tables (default: rough initial values)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_navigate)
+
+    p = sub.add_parser("demo", help="simulate the paper's experiment and run the main job into results/")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--out", default="results", help="output folder (default results/)")
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except _known_errors() as exc:
+        print(f"casadi-sins {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,37 @@
+"""The command line: outputs that another program can read back, clear errors, exit codes."""
+
+import numpy as np
+
+from casadi_sins import parameters as P
+from casadi_sins.cli import main
+from casadi_sins.recording import read_recording
+
+
+def test_simulate_writes_a_recording_and_truth_that_read_back(tmp_path, capsys):
+    assert main(["simulate", "--seed", "3", "--out", str(tmp_path), "--no-noise"]) == 0
+    rec = read_recording(tmp_path / "kang2013-seed3.toml")
+    truth = P.read_table(tmp_path / "kang2013-seed3.truth.csv")
+    assert len(rec.time) == 129000 and rec.site.gravity is None
+    assert (tmp_path / "kang2013-seed3.truth.csv").read_text().startswith("parameter,unit,value\n")
+    np.testing.assert_allclose(truth.values, P.ParameterSet(truth.values).values)
+    assert main(["validate", str(tmp_path / "kang2013-seed3.toml")]) == 0
+    assert "group 3: NUE -+X-> NED" in capsys.readouterr().out
+    assert not list(tmp_path.glob(".*tmp"))  # nothing half-written left behind
+
+
+def test_bad_recording_gives_one_line_error_and_status_2(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('format = "sins-recording/1"\nname = "x"\ndata = "x.csv"\n[site]\nlatitude_deg = 10\n')
+    assert main(["validate", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml" in err and "rate_hz" in err
+
+
+def test_rough_writes_a_parameter_table(tmp_path, short_problem):
+    from casadi_sins.recording import write_recording
+    from casadi_sins.simulate import simulate
+
+    path = write_recording(simulate(short_problem, seed=0).recording, tmp_path / "r.toml")
+    assert main(["rough", str(path), "--out", str(tmp_path / "rough.csv")]) == 0
+    rough = P.read_table(tmp_path / "rough.csv")
+    assert rough["gyro_misalign_xy"] == 0.0 and rough["accel_scale_y"] > 0

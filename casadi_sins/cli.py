@@ -92,6 +92,31 @@ def cmd_navigate(args) -> int:
     return 0
 
 
+def cmd_calibrate(args) -> int:
+    from .parameters import read_table, write_table
+    from .recording import read_recording
+    from .report import parameter_report, write_calibration_report
+    from .result import CalibrationError
+    from .solvers import calibrate
+
+    rec = read_recording(args.recording)
+    truth = read_table(args.truth) if args.truth else None
+    initial = read_table(args.initial) if args.initial else None
+    options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
+    try:
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, **options)
+    except CalibrationError as exc:
+        raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
+    write_table(args.out, result.parameters, truth)
+    print(f"{args.solver}: {result.iterations} iterations, {result.wall_time:.2f} s; wrote {args.out}")
+    if args.report:
+        write_calibration_report(result, args.report, rec.name, truth)
+        print(f"wrote report to {args.report}")
+    print(parameter_report(result, truth).drop(columns=["unit"]).to_string(
+        index=False, float_format=lambda x: f"{x:.6g}"))
+    return 0
+
+
 def cmd_demo(args) -> int:
     """Simulate the default problem and run the main job into ``results/``."""
     from .initial import rough_parameters
@@ -149,6 +174,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--params", nargs="*", help="parameter tables (default: rough initial values)")
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=cmd_navigate)
+
+    p = sub.add_parser("calibrate", help="calibrate a recording: the parameter table (and a report)")
+    p.add_argument("recording")
+    p.add_argument("--solver", default="ils", choices=["ils"], help="ils: the paper's iterative least squares")
+    p.add_argument("--out", required=True, help="parameter table CSV to write")
+    p.add_argument("--report", help="folder for the per-iteration and parameter reports (CSV, Markdown)")
+    p.add_argument("--truth", help="truth table: adds errors in natural units to the table and report")
+    p.add_argument("--initial", help="starting parameter table (default: the paper's rough values)")
+    p.add_argument("--max-iterations", type=int, help="iteration limit (default 10)")
+    p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("demo", help="simulate the paper's experiment and run the main job into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")

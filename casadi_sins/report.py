@@ -107,3 +107,38 @@ def plot_navigation(rec: Recording, runs: dict[str, list[GroupNavigation]], path
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"{rec.name}: navigated velocity (grey: rotations)")
     return save_figure(fig, path)
+
+
+def natural_sigma(params: P.ParameterSet) -> np.ndarray:
+    """1-sigma of each parameter in the natural unit of its error (scale factors relative, ppm)."""
+    if params.sigma is None:
+        return np.full(P.N_PARAMS, np.nan)
+    sigma = params.sigma / P.NATURAL_SCALE
+    sigma[P.SCALE_MASK] /= np.abs(params.values[P.SCALE_MASK])
+    return sigma
+
+
+def parameter_report(result, truth: P.ParameterSet | None = None) -> pd.DataFrame:
+    """The calibrated parameters with sigma in natural units (and errors against a truth)."""
+    params = result.parameters
+    frame = pd.DataFrame({"parameter": P.NAMES, "unit": P.UNITS, "value": params.values,
+                          "natural unit": P.NATURAL_UNITS, "sigma (natural)": natural_sigma(params)})
+    if truth is not None:
+        err = P.natural_errors(params.values, truth.values)
+        frame["truth"] = truth.values
+        frame["error (natural)"] = err
+        frame["error/sigma"] = err / frame["sigma (natural)"]
+    return frame
+
+
+def write_calibration_report(result, out_dir: str | Path, name: str, truth: P.ParameterSet | None = None):
+    """Per-iteration table (the paper's Table 2 layout) and the parameter report, CSV + Markdown."""
+    out_dir = Path(out_dir)
+    stem = f"{name}-{result.solver}"
+    write_frame(result.history_frame(truth), out_dir / f"{stem}-iterations",
+                f"{name}: {result.solver} per iteration (errors in natural units)", float_format="%.8g")
+    write_frame(parameter_report(result, truth), out_dir / f"{stem}-parameters",
+                f"{name}: {result.solver} calibration ({result.iterations} iterations, "
+                f"{result.wall_time:.2f} s, residual rms {result.residual_rms:.3g}). sigma: {result.sigma_meaning}",
+                float_format="%.6g")
+    return out_dir

@@ -41,7 +41,7 @@ def main():
     x0 = np.zeros(13)
     x0[0] = 1.0
     dth = np.zeros((3, n))
-    t_chain = best_of(lambda: chain_function(n)(x0, dth, dth, np.zeros(3), np.zeros(3)))
+    t_chain = best_of(lambda: chain_function(n)(x0, dth, dth, np.zeros(3), np.zeros(3), 1.0))
     print(f"recording: {len(rec.time)} samples at {rec.rate_hz:g} Hz ({rec.time[-1]:g} s)")
     print(f"simulate                      {t_sim:7.3f} s")
     print(f"navigate, first call          {t_first:7.3f} s (builds the mapaccum chain)")

@@ -177,7 +177,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("calibrate", help="calibrate a recording: the parameter table (and a report)")
     p.add_argument("recording")
-    p.add_argument("--solver", default="ils", choices=["ils"], help="ils: the paper's iterative least squares")
+    p.add_argument("--solver", default="nlp", choices=["nlp", "ils"],
+                   help="nlp: CasADi/Ipopt over all rotations (default); ils: the paper's iterative least squares")
     p.add_argument("--out", required=True, help="parameter table CSV to write")
     p.add_argument("--report", help="folder for the per-iteration and parameter reports (CSV, Markdown)")
     p.add_argument("--truth", help="truth table: adds errors in natural units to the table and report")

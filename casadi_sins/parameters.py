@@ -112,18 +112,25 @@ def sensor_matrices(p):
 
 
 def output_model_expr(dtheta, dv, p, dt):
-    """Raw pulses ``(dN_g, dN_a)`` from true increments (eq. 1); CasADi expressions."""
+    """Raw pulses ``(dN_g, dN_a)`` from true increments (eq. 1); CasADi expressions.
+
+    ``dtheta``, ``dv`` may be 3 x n matrices of n intervals with ``dt`` a 1 x n row.
+    """
     k_a, s_a, b_a, k_g, s_g, b_g = sensor_matrices(p)
-    dn_g = (k_g @ dtheta + b_g * dt) / s_g
-    dn_a = (k_a @ dv + b_a * dt) / s_a
+    dn_g = ca.diag(1 / s_g) @ (k_g @ dtheta + b_g @ dt)
+    dn_a = ca.diag(1 / s_a) @ (k_a @ dv + b_a @ dt)
     return dn_g, dn_a
 
 
 def compensate_expr(dn_g, dn_a, p, dt):
-    """Increments ``(dtheta, dv)`` from raw pulses: the exact inverse of eq. 1."""
+    """Increments ``(dtheta, dv)`` from raw pulses: the exact inverse of eq. 1.
+
+    ``dn_g``, ``dn_a`` may be 3 x n matrices of pulse sums over n intervals with ``dt`` a 1 x n row
+    (the model is linear, so summed pulses compensate exactly to summed increments).
+    """
     k_a, s_a, b_a, k_g, s_g, b_g = sensor_matrices(p)
-    dtheta = ca.solve(k_g, s_g * dn_g - b_g * dt)
-    dv = ca.solve(k_a, s_a * dn_a - b_a * dt)
+    dtheta = ca.solve(k_g, ca.diag(s_g) @ dn_g - b_g @ dt)
+    dv = ca.solve(k_a, ca.diag(s_a) @ dn_a - b_a @ dt)
     return dtheta, dv
 
 

@@ -8,12 +8,16 @@ from .parameters import ParameterSet
 from .recording import Recording
 from .result import CalibrationResult
 
-SOLVERS = ("ils",)
+SOLVERS = ("nlp", "ils")
 
 
-def calibrate(rec: Recording, solver: str = "ils", initial: ParameterSet | None = None,
+def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None = None,
               progress: Callable[[str], None] | None = None, **options) -> CalibrationResult:
-    """Calibrate a recording with the named solver (``"ils"``)."""
+    """Calibrate a recording with the named solver: ``"nlp"`` (CasADi/Ipopt) or ``"ils"`` (the paper's)."""
+    if solver == "nlp":
+        from .nlp import calibrate_nlp
+
+        return calibrate_nlp(rec, initial=initial, progress=progress, **options)
     if solver == "ils":
         from .ils import calibrate_ils
 

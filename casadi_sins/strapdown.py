@@ -92,10 +92,14 @@ def quat_to_dcm_np(q: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- the step
-def step_expr(state, dtheta, dv, earth_rate_dt, gravity_dt):
-    """Next navigation state from the current one and compensated increments (CasADi)."""
+def step_expr(state, dtheta, dv, earth_rate_dt, gravity_dt, previous_scale=1):
+    """Next navigation state from the current one and compensated increments (CasADi).
+
+    ``previous_scale`` multiplies the previous increments in the coning and sculling terms: 1 for
+    uniform steps, 0 where the step length changes (block-summed static segments).
+    """
     q, v = state[Q], state[V]
-    dtheta_prev, dv_prev = state[PREV_DTHETA], state[PREV_DV]
+    dtheta_prev, dv_prev = previous_scale * state[PREV_DTHETA], previous_scale * state[PREV_DV]
     phi = dtheta + ca.cross(dtheta_prev, dtheta) / 12
     rotation = ca.cross(dtheta, dv) / 2 + ca.cross(dtheta, ca.cross(dtheta, dv)) / 6
     dv_body = dv + rotation + (ca.cross(dtheta_prev, dv) + ca.cross(dv_prev, dtheta)) / 12
@@ -109,12 +113,13 @@ def step_expr(state, dtheta, dv, earth_rate_dt, gravity_dt):
 
 @functools.lru_cache(maxsize=None)
 def step_function() -> ca.Function:
-    """The strapdown step ``(state[13], dtheta[3], dv[3], earth_rate_dt[3], gravity_dt[3]) -> state``."""
+    """The strapdown step ``(state[13], dtheta[3], dv[3], earth_rate_dt[3], gravity_dt[3], previous_scale)
+    -> state``."""
     x = ca.SX.sym("x", STATE_SIZE)
     dth, dv = ca.SX.sym("dtheta", 3), ca.SX.sym("dv", 3)
-    wdt, gdt = ca.SX.sym("earth_rate_dt", 3), ca.SX.sym("gravity_dt", 3)
-    return ca.Function("strapdown_step", [x, dth, dv, wdt, gdt], [step_expr(x, dth, dv, wdt, gdt)],
-                       ["x", "dtheta", "dv", "earth_rate_dt", "gravity_dt"], ["x_next"])
+    wdt, gdt, scale = ca.SX.sym("earth_rate_dt", 3), ca.SX.sym("gravity_dt", 3), ca.SX.sym("previous_scale")
+    return ca.Function("strapdown_step", [x, dth, dv, wdt, gdt, scale], [step_expr(x, dth, dv, wdt, gdt, scale)],
+                       ["x", "dtheta", "dv", "earth_rate_dt", "gravity_dt", "previous_scale"], ["x_next"])
 
 
 @functools.lru_cache(maxsize=32)
@@ -196,7 +201,7 @@ def navigate_group(rec: Recording, group: int, params, initial_attitude: np.ndar
         initial_attitude = align(dth[local], dv[local], rec.dt)
     x0 = np.concatenate([dcm_to_quat(initial_attitude), np.zeros(3), dth[0], dv[0]])
     wdt, gdt = navigation_constants(rec)
-    states = np.asarray(chain_function(len(dth))(x0, dth.T, dv.T, wdt, gdt)).T
+    states = np.asarray(chain_function(len(dth))(x0, dth.T, dv.T, wdt, gdt, 1.0)).T
     return GroupNavigation(group, span, rec.time[span], states[:, V], states[:, Q], np.asarray(initial_attitude))
 
 

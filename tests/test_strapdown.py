@@ -26,7 +26,7 @@ def test_static_step_keeps_attitude_and_velocity():
     w, f = frames.earth_rate_enu(lat), np.array([0.0, 0.0, g])
     dth, dv = dcm.T @ w * dt, dcm.T @ f * dt
     x0 = np.concatenate([dcm_to_quat(dcm), [0.01, 0.02, 0.03], dth, dv])
-    x1 = np.asarray(step_function()(x0, dth, dv, w * dt, [0, 0, -g * dt])).ravel()
+    x1 = np.asarray(step_function()(x0, dth, dv, w * dt, [0, 0, -g * dt], 1.0)).ravel()
     np.testing.assert_allclose(x1[:7], x0[:7], atol=1e-15)
 
 

@@ -1,0 +1,377 @@
+"""The CasADi/Ipopt estimator: calibration as one nonlinear least-squares problem.
+
+Decision variables
+    the 21 parameters as deviations from a reference (the starting values) in
+    natural units (ug, ppm of the value, arcsec, deg/h), and per group a
+    small rotation (arcsec, ENU) of the start attitude away from the coarse
+    alignment: the positions' deviations from nominal are nuisance variables,
+    the alignment is only the starting guess (physics pitfall 6).
+Graph
+    every group is navigated by the one strapdown step (:func:`strapdown.step_function`)
+    chained with ``mapaccum``; the raw pulses enter through the one
+    compensation expression (:func:`parameters.compensate_expr`).  In static
+    segments the pulses are summed into blocks (default 1 s: exact for the
+    output model, and the strapdown step is exact for a body at rest); in
+    rotations every sample is a step (``rotation_block`` > 1 sums samples
+    there too, with an error growing as rate^2 x step^3: see the benchmarks).
+Residuals
+    the navigated velocity at the end of every static block (true velocity
+    zero), as differences between consecutive observations divided by the
+    square root of the samples between them.  White accelerometer noise makes
+    the velocity a random walk; these differences are white and of equal
+    variance (physics pitfall 7).  A difference that spans a rotation carries
+    the velocity change across the rotation; ``use_rotation_steps=False``
+    drops it (as a free velocity offset per static segment would), for units
+    whose lever arms or timing offsets make those steps unmodelled.
+Solve
+    Ipopt, derivatives by algorithmic differentiation, Gauss-Newton Hessian
+    ``J^T J`` (see benchmarks/bench_nlp.py for exact Hessian and L-BFGS).
+Gyro residuals
+    per static segment, the mean compensated gyro rate against the Earth rate
+    seen in the navigated attitude.  The velocity sees gyro errors only through
+    the slow attitude drift; the segment mean measures them directly, with gyro
+    noise that is independent of the accelerometer noise of the velocity.
+    Without them the free start attitudes cost a factor 3 in gyro scale factor.
+Uncertainty
+    the noise level of each residual kind is a variance component estimated
+    from the fit (residual sum of squares over its degrees of freedom, pitfall
+    8); then ``(J^T W J)^-1`` at the solution.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Callable
+
+import casadi as ca
+import numpy as np
+
+from . import parameters as P
+from .initial import rough_parameters
+from .recording import Recording
+from .result import CalibrationError, CalibrationResult
+from .strapdown import (PREV_DTHETA, Q, STATE_SIZE, dcm_to_quat, group_alignment, navigation_constants,
+                        quat_from_rotvec, quat_multiply, step_function)
+from .units import ARCSEC
+
+SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
+                 "W from the noise levels estimated in the fit")
+
+
+@dataclasses.dataclass
+class GroupSteps:
+    """How one group is stepped: pulse sums per step and which step ends are observed."""
+
+    group: int
+    pulses_gyro: np.ndarray  # (3, M) pulse sums per step
+    pulses_accel: np.ndarray
+    step_dt: np.ndarray  # (M,) step length, s
+    previous_scale: np.ndarray  # (M,) 1 where the previous step has the same length, else 0
+    observed: np.ndarray  # (K,) indices of steps whose end velocity is observed
+    samples_between: np.ndarray  # (K,) samples between consecutive observations (first: since the start)
+    after_rotation: np.ndarray  # (K,) True where the difference spans a rotation
+    observed_time: np.ndarray  # (K,) time of each observation, s
+    segment_of: np.ndarray  # (K,) segment number of each observation
+
+
+def plan_steps(rec: Recording, group: int, static_block_s: float = 1.0, rotation_block: int = 1) -> GroupSteps:
+    """Split a group's samples into navigation steps (blocks in static segments)."""
+    span = rec.group_samples(group)
+    block = max(1, int(round(static_block_s * rec.rate_hz)))
+    bounds: list[tuple[int, int, int | None]] = []  # (first sample, stop, static segment number or None)
+    cursor = span.start
+    for seg in rec.group_segments(group):
+        sl = rec.segment_samples(seg)
+        while cursor < sl.start:  # samples between segments: one step each
+            bounds.append((cursor, cursor + 1, None))
+            cursor += 1
+        size = block if seg.is_static else rotation_block
+        n = sl.stop - sl.start
+        count = max(1, int(round(n / size)))
+        edges = np.round(np.linspace(sl.start, sl.stop, count + 1)).astype(int)
+        for a, b in zip(edges[:-1], edges[1:]):
+            bounds.append((a, b, seg.number if seg.is_static else None))
+        cursor = sl.stop
+    while cursor < span.stop:
+        bounds.append((cursor, cursor + 1, None))
+        cursor += 1
+    cum_g = np.vstack([np.zeros(3), np.cumsum(rec.gyro, axis=0)])
+    cum_a = np.vstack([np.zeros(3), np.cumsum(rec.accel, axis=0)])
+    first = np.array([b[0] for b in bounds])
+    stop = np.array([b[1] for b in bounds])
+    static_of = np.array([-1 if b[2] is None else b[2] for b in bounds])
+    lengths = (stop - first).astype(float)
+    observed = np.flatnonzero(static_of >= 0)
+    obs_stop = stop[observed]
+    between = np.diff(np.concatenate([[span.start], obs_stop]))
+    seg_numbers = static_of[observed]
+    spans_rotation = np.concatenate([[False], seg_numbers[1:] != seg_numbers[:-1]])
+    return GroupSteps(
+        group=group,
+        pulses_gyro=(cum_g[stop] - cum_g[first]).T,
+        pulses_accel=(cum_a[stop] - cum_a[first]).T,
+        step_dt=lengths * rec.dt,
+        # coning and sculling use the previous increment as a rate estimate: meaningless across a change of
+        # step length (a 1 s block after a rotation sample would extrapolate the rotation into rest)
+        previous_scale=(lengths == np.concatenate([[lengths[0]], lengths[:-1]])).astype(float),
+        observed=observed,
+        samples_between=between.astype(float),
+        after_rotation=spans_rotation,
+        observed_time=rec.time[obs_stop - 1],
+        segment_of=seg_numbers,
+    )
+
+
+def natural_to_parameters(z, reference: np.ndarray):
+    """Parameters (SI) from natural-unit deviations ``z`` from ``reference`` (CasADi or NumPy)."""
+    ref = ca.DM(reference)
+    scale = np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)
+    return ref + ca.diag(ca.DM(scale)) @ z if isinstance(z, (ca.MX, ca.SX)) else reference + scale * np.asarray(z)
+
+
+RESIDUAL_KINDS = ("velocity", "gyro")
+
+
+@dataclasses.dataclass
+class Problem:
+    """The built NLP: CasADi functions of the decision vector, and what they mean.
+
+    Residuals come in two kinds with independent noise: velocity differences (accelerometer
+    noise, unit ``velocity_unit`` m/s per square-root sample) and static gyro means (gyro noise,
+    unit ``gyro_unit`` rad/s per square-root sample).  Their relative weights are variance
+    components estimated from the fit.
+    """
+
+    residuals: ca.Function  # w -> r (in the nominal units of each kind)
+    jacobian: ca.Function  # w -> (r, J)
+    n_variables: int
+    n_residuals: int
+    kind: np.ndarray  # (m,) 0 velocity, 1 gyro
+    groups: list[GroupSteps]
+    reference: np.ndarray
+    start_attitudes: dict[int, np.ndarray]
+    velocity_unit: float
+    gyro_unit: float
+    build_time: float
+    residual_index: list[tuple]
+
+
+def static_gyro_noise(rec: Recording, params: np.ndarray, block: int = 100) -> float:
+    """A first estimate of the gyro white noise per sample (rad/s), from block means in static segments.
+
+    Over-estimates with integer pulses (quantisation adds to short blocks); the fit refines it.
+    """
+    from .strapdown import compensated_increments
+
+    variances = []
+    for seg in rec.static_segments:
+        dtheta, _ = compensated_increments(rec, params, rec.segment_samples(seg))
+        n = len(dtheta) // block
+        if n < 3:
+            continue
+        means = dtheta[: n * block].reshape(n, block, 3).mean(axis=1) / rec.dt
+        variances.append(means.var(axis=0, ddof=1).mean() * block)
+    return float(np.sqrt(np.mean(variances))) if variances else 1e-8
+
+
+def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float = 1.0, rotation_block: int = 1,
+                  use_rotation_steps: bool = True, noise_ug: float = 50.0) -> Problem:
+    """Build the symbolic NLP for a recording around ``reference`` parameters."""
+    from .strapdown import quat_to_dcm
+
+    t0 = time.perf_counter()
+    groups = rec.group_ids
+    n_var = P.N_PARAMS + 3 * len(groups)
+    w = ca.MX.sym("w", n_var)
+    params = natural_to_parameters(w[: P.N_PARAMS], reference)
+    earth_dt, gravity_dt = navigation_constants(rec)
+    velocity_unit = noise_ug * P.UG * rec.dt  # velocity noise per sample at the nominal accelerometer noise
+    gyro_unit = static_gyro_noise(rec, reference)
+    parts, kinds, index = [], [], []
+    plans, starts = [], {}
+    for gi, group in enumerate(groups):
+        plan = plan_steps(rec, group, static_block_s, rotation_block)
+        plans.append(plan)
+        start = group_alignment(rec, group, reference)
+        starts[group] = start
+        steps = len(plan.step_dt)
+        dt_row = ca.DM(plan.step_dt).T
+        dtheta, dv = P.compensate_expr(ca.DM(plan.pulses_gyro), ca.DM(plan.pulses_accel), params, dt_row)
+        rotvec = w[P.N_PARAMS + 3 * gi: P.N_PARAMS + 3 * gi + 3] * ARCSEC
+        q0 = quat_multiply(quat_from_rotvec(rotvec), ca.DM(dcm_to_quat(start)))
+        x0 = ca.vertcat(q0, ca.DM.zeros(3), dtheta[:, 0], dv[:, 0])
+        chain = step_function().mapaccum("strapdown_chain", steps)
+        ratio = plan.step_dt[None, :] / rec.dt
+        states = chain(x0, dtheta, dv, ca.DM(earth_dt[:, None] * ratio), ca.DM(gravity_dt[:, None] * ratio),
+                       ca.DM(plan.previous_scale).T)
+        # velocity differences between consecutive observations, whitened for a random walk
+        velocity = states[4:7, list(plan.observed)]
+        diffs = ca.horzcat(velocity[:, 0], velocity[:, 1:] - velocity[:, :-1])
+        keep = np.ones(len(plan.observed), bool) if use_rotation_steps else ~plan.after_rotation
+        weights = 1.0 / (np.sqrt(plan.samples_between) * velocity_unit)
+        cols = list(np.flatnonzero(keep))
+        parts.append(ca.vec(diffs[:, cols] @ ca.diag(ca.DM(weights[cols]))))
+        kinds += [0] * (3 * len(cols))
+        index += [(group, "velocity", int(k), axis) for k in cols for axis in range(3)]
+        # mean gyro rate of each static segment against the Earth rate seen in the navigated attitude
+        for seg_number in np.unique(plan.segment_of):
+            cols_seg = plan.observed[plan.segment_of == seg_number]
+            duration = float(plan.step_dt[cols_seg].sum())
+            n_samples = duration / rec.dt
+            mean_rate = ca.sum2(dtheta[:, list(cols_seg)]) / duration
+            mid = int(cols_seg[len(cols_seg) // 2])
+            earth_in_body = quat_to_dcm(states[Q, mid]).T @ ca.DM(rec.site.earth_rate)
+            parts.append((mean_rate - earth_in_body) * (np.sqrt(n_samples) / gyro_unit))
+            kinds += [1] * 3
+            index += [(group, "gyro", int(seg_number), axis) for axis in range(3)]
+    r = ca.vertcat(*parts)
+    residuals = ca.Function("residuals", [w], [r])
+    jacobian = ca.Function("residuals_jacobian", [w], [r, ca.jacobian(r, w)])
+    return Problem(residuals, jacobian, n_var, r.shape[0], np.array(kinds), plans, reference, starts,
+                   velocity_unit, gyro_unit, time.perf_counter() - t0, index)
+
+
+def _solve_ipopt(problem: Problem, hessian: str, tolerance: float, max_iterations: int,
+                 progress: Callable[[str], None] | None, kind_weights: np.ndarray):
+    w = ca.MX.sym("w", problem.n_variables)
+    r = problem.residuals(w) * ca.DM(kind_weights[problem.kind])
+    weight = 1.0 / problem.n_residuals  # mean square: the tolerance does not depend on the recording's length
+    nlp = {"x": w, "f": 0.5 * weight * ca.dot(r, r)}
+    # The variables are in natural units already: Ipopt's gradient scaling at the (far-off) rough start
+    # would shrink the objective by ~1e-6 and stall the line search at round-off.  The gradient of the
+    # chained navigation has a round-off floor near 1e-8; a gradient of 1e-7 moves the estimate by
+    # ~1e-4 of its sigma.
+    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
+            "ipopt.acceptable_tol": 100 * tolerance, "ipopt.acceptable_iter": 2,
+            "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"}
+    if hessian == "gauss-newton":
+        _, jac = problem.jacobian(w)
+        jac = ca.diag(ca.DM(kind_weights[problem.kind])) @ jac
+        sigma = ca.MX.sym("sigma")
+        opts["hess_lag"] = ca.Function("nlp_hess_l", [w, ca.MX.sym("p", 0, 1), sigma, ca.MX.sym("lam_g", 0, 1)],
+                                       [sigma * weight * ca.triu(jac.T @ jac)], ["x", "p", "lam_f", "lam_g"],
+                                       ["triu_hess_gamma_x_x"])
+    elif hessian == "limited-memory":
+        opts["ipopt.hessian_approximation"] = "limited-memory"
+    elif hessian != "exact":
+        raise ValueError(f"unknown hessian {hessian!r}")
+    solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
+    sol = solver(x0=np.zeros(problem.n_variables))
+    stats = solver.stats()
+    if progress:
+        progress(f"nlp: ipopt {stats['return_status']} after {stats['iter_count']} iterations, "
+                 f"cost {float(sol['f']):.6g}")
+    return np.asarray(sol["x"]).ravel(), stats
+
+
+def variance_components(r: np.ndarray, jac: np.ndarray, kind: np.ndarray, kind_weights: np.ndarray,
+                        rounds: int = 5):
+    """Re-estimate the noise level of each residual kind from the fit, with Gauss-Newton steps.
+
+    Each kind's variance is its weighted residual sum of squares over its degrees of freedom
+    (its count less its share of the hat matrix's trace).  Returns the step in the variables and the
+    new kind weights (1/sigma in the nominal units of each kind).
+    """
+    step = np.zeros(jac.shape[1])
+    weights = kind_weights.copy()
+    for _ in range(rounds):
+        wr = weights[kind]
+        jw, rw = jac * wr[:, None], (r + jac @ step) * wr
+        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        step = step - vt.T @ ((u.T @ rw) / s)
+        rw = (r + jac @ step) * wr
+        leverage = np.sum(u**2, axis=1)
+        new = weights.copy()
+        for k in range(len(weights)):
+            mask = kind == k
+            dof = mask.sum() - leverage[mask].sum()
+            if mask.any() and dof > 0.5:
+                new[k] = weights[k] / np.sqrt(np.sum(rw[mask] ** 2) / dof)
+        if np.allclose(new, weights, rtol=1e-4):
+            break
+        weights = new
+    return step, weights
+
+
+def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian: str = "gauss-newton",
+                  static_block_s: float = 1.0, rotation_block: int = 4, use_rotation_steps: bool = True,
+                  tolerance: float = 1e-7, max_iterations: int = 100,
+                  progress: Callable[[str], None] | None = None) -> CalibrationResult:
+    """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
+
+    Parameters
+    ----------
+    rec : Recording
+    initial : ParameterSet, optional
+        Starting values and reference of the natural-unit variables; default the rough values.
+    hessian : {"gauss-newton", "exact", "limited-memory"}
+    static_block_s, rotation_block : float, int
+        Step sizes: seconds per static block, samples per rotation step (4: a method error below
+        0.001 natural units on the paper's problem, see benchmarks/bench_nlp.py).
+    use_rotation_steps : bool
+        Keep the velocity differences that span rotations.
+    tolerance : float
+        Ipopt's tolerance on the gradient of the mean square whitened residual (natural units).
+
+    Raises
+    ------
+    CalibrationError
+        Ipopt fails to converge or the problem is rank deficient.
+    """
+    t_start = time.perf_counter()
+    initial = initial or rough_parameters(rec)
+    reference = initial.values.copy()
+    problem = build_problem(rec, reference, static_block_s, rotation_block, use_rotation_steps)
+    if progress:
+        progress(f"nlp: graph of {sum(len(p.step_dt) for p in problem.groups)} steps, {problem.n_variables} "
+                 f"variables, {problem.n_residuals} residuals built in {problem.build_time:.2f} s")
+    kind_weights = np.ones(len(RESIDUAL_KINDS))
+    z, stats = _solve_ipopt(problem, hessian, tolerance, max_iterations, progress, kind_weights)
+    if not stats["success"]:
+        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} "
+                               f"after {stats['iter_count']} iterations")
+    r, jac = (np.asarray(m) for m in problem.jacobian(z))
+    _check_rank(jac)
+    step, kind_weights = variance_components(r.ravel(), jac, problem.kind, kind_weights)
+    # the reweighting step is a fraction of a sigma, where the model is linear: update r, keep J
+    z = z + step
+    r = r.ravel() + jac @ step
+    wr = kind_weights[problem.kind]
+    covariance_w, rms = _covariance(jac * wr[:, None], r * wr)
+    values = natural_to_parameters(z[: P.N_PARAMS], reference)
+    scale = np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)  # d(params)/dz
+    covariance = covariance_w[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
+    start_offsets = {g: z[P.N_PARAMS + 3 * i: P.N_PARAMS + 3 * i + 3] for i, g in enumerate(rec.group_ids)}
+    noise = {"accel_noise_ug": problem.velocity_unit / kind_weights[0] / (P.UG * rec.dt),
+             "gyro_noise_deg_h": problem.gyro_unit / kind_weights[1] / (np.pi / 180 / 3600)}
+    if progress:
+        progress(f"nlp: noise from the fit: accelerometers {noise['accel_noise_ug']:.3g} ug, "
+                 f"gyros {noise['gyro_noise_deg_h']:.3g} deg/h per sample")
+    info = {"ipopt_iterations": int(stats["iter_count"]), "build_time": problem.build_time,
+            "residuals": problem.n_residuals, "start_offsets_arcsec": start_offsets, "residual_vector": r * wr,
+            "residual_index": problem.residual_index, "residual_kind": problem.kind, "plans": problem.groups,
+            "covariance_natural": covariance_w, "hessian": hessian, **noise}
+    return CalibrationResult("nlp", P.ParameterSet(values, covariance=covariance), initial,
+                             [reference, values], int(stats["iter_count"]), True, rms,
+                             time.perf_counter() - t_start, SIGMA_MEANING, info)
+
+
+def _check_rank(jac: np.ndarray) -> None:
+    m, n = jac.shape
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)
+    if m <= n or s[-1] < 1e-10 * s[0]:
+        weak = np.abs(vt[-1]) > 0.3
+        names = [P.NAMES[i] if i < P.N_PARAMS else f"start attitude of group {(i - P.N_PARAMS) // 3 + 1}"
+                 for i in np.flatnonzero(weak)]
+        raise CalibrationError(f"the residuals do not determine all parameters (condition "
+                               f"{s[0] / max(s[-1], 1e-300):.2g}); not observable from this schedule: "
+                               f"{', '.join(names)}")
+
+
+def _covariance(jac: np.ndarray, r: np.ndarray):
+    """``s^2 (J^T J)^-1`` of whitened residuals, ``s^2`` their variance per degree of freedom."""
+    m, n = jac.shape
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)
+    variance = float(r @ r) / (m - n)
+    return (vt.T / s**2) @ vt * variance, float(np.sqrt(variance))

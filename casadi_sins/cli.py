@@ -117,13 +117,31 @@ def cmd_calibrate(args) -> int:
     return 0
 
 
+def cmd_compare(args) -> int:
+    from .compare import compare
+    from .parameters import read_table
+    from .recording import read_recording
+    from .result import CalibrationError
+
+    rec = read_recording(args.recording)
+    truth = read_table(args.truth) if args.truth else None
+    try:
+        _, table, summary = compare(rec, args.out, truth, progress=print)
+    except CalibrationError as exc:
+        raise CliError(f"{rec.label}: calibration failed: {exc}") from None
+    print(summary.drop(columns=["sigma means"]).to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
+    if truth is not None:
+        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print(f"wrote the comparison to {args.out}")
+    return 0
+
+
 def cmd_demo(args) -> int:
-    """Simulate the default problem and run the main job into ``results/``."""
-    from .initial import rough_parameters
+    """Simulate the default problem and compare both solvers on it, into ``results/``."""
+    from .compare import compare
     from .problem import load_problem
-    from .report import plot_navigation
     from .simulate import simulate, write_simulation
-    from .strapdown import navigate
 
     out = Path(args.out)
     problem = load_problem(args.problem)
@@ -131,10 +149,12 @@ def cmd_demo(args) -> int:
     sim = simulate(problem, seed=args.seed)
     rec_path = write_simulation(sim, out / "recordings")
     print(f"simulated {problem.name} (seed {args.seed}): {rec_path} in {time.perf_counter() - t0:.1f} s")
-    rec = sim.recording
-    runs = {"rough initial values": navigate(rec, rough_parameters(rec).values),
-            "truth": navigate(rec, sim.truth.values)}
-    print(f"wrote {plot_navigation(rec, runs, out / f'{rec.name}-navigation.png')}")
+    _, table, summary = compare(sim.recording, out, sim.truth, progress=print)
+    print(summary.drop(columns=["sigma means"]).to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
+    print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print(f"wrote {out}/{sim.recording.name}-compare.{{csv,md}}, -compare-summary.{{csv,md}}, "
+          f"-compare-residuals.png and the parameter tables")
     return 0
 
 
@@ -186,7 +206,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-iterations", type=int, help="iteration limit (default 10)")
     p.set_defaults(func=cmd_calibrate)
 
-    p = sub.add_parser("demo", help="simulate the paper's experiment and run the main job into results/")
+    p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")
+    p.add_argument("recording")
+    p.add_argument("--truth", help="truth table: errors against it in natural units")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("demo", help="simulate the paper's experiment and compare both solvers into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--out", default="results", help="output folder (default results/)")

@@ -10,10 +10,10 @@ Graph
     every group is navigated by the one strapdown step (:func:`strapdown.step_function`)
     chained with ``mapaccum``; the raw pulses enter through the one
     compensation expression (:func:`parameters.compensate_expr`).  In static
-    segments the pulses are summed into blocks (default 1 s: exact for the
-    output model, and the strapdown step is exact for a body at rest); in
-    rotations every sample is a step (``rotation_block`` > 1 sums samples
-    there too, with an error growing as rate^2 x step^3: see the benchmarks).
+    segments the pulses are summed into blocks (default 1 s, 5 s for integer
+    pulses: exact for the output model, and the strapdown step is exact for a
+    body at rest); in rotations into 40 ms steps (the error grows as
+    rate^2 x step^3: below 0.001 natural units at 40 ms, see the benchmarks).
 Residuals
     the navigated velocity at the end of every static block (true velocity
     zero), as differences between consecutive observations divided by the
@@ -76,10 +76,12 @@ class GroupSteps:
     segment_of: np.ndarray  # (K,) segment number of each observation
 
 
-def plan_steps(rec: Recording, group: int, static_block_s: float = 1.0, rotation_block: int = 1) -> GroupSteps:
-    """Split a group's samples into navigation steps (blocks in static segments)."""
+def plan_steps(rec: Recording, group: int, static_block_s: float = 1.0, rotation_step_s: float = 0.0
+               ) -> GroupSteps:
+    """Split a group's samples into navigation steps (blocks in static segments and rotations)."""
     span = rec.group_samples(group)
     block = max(1, int(round(static_block_s * rec.rate_hz)))
+    rotation_block = max(1, int(round(rotation_step_s * rec.rate_hz)))
     bounds: list[tuple[int, int, int | None]] = []  # (first sample, stop, static segment number or None)
     cursor = span.start
     for seg in rec.group_segments(group):
@@ -165,6 +167,9 @@ class Problem:
     gyro_unit: float
     build_time: float
     residual_index: list[tuple]
+    chains: list[np.ndarray]  # residual indices of each run of consecutive velocity differences (group, axis)
+    samples: np.ndarray  # (m,) samples spanned by each velocity difference (0 for gyro residuals)
+    from_start: np.ndarray  # (m,) True for a group's first difference (velocity known zero at the start)
 
 
 def static_gyro_noise(rec: Recording, params: np.ndarray, block: int = 100) -> float:
@@ -186,7 +191,7 @@ def static_gyro_noise(rec: Recording, params: np.ndarray, block: int = 100) -> f
     return max(float(np.sqrt(np.mean(variances))) if variances else floor, floor)
 
 
-def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float = 1.0, rotation_block: int = 1,
+def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float = 1.0, rotation_step_s: float = 0.04,
                   use_rotation_steps: bool = True, noise_ug: float = 50.0) -> Problem:
     """Build the symbolic NLP for a recording around ``reference`` parameters."""
     from .strapdown import quat_to_dcm
@@ -199,10 +204,10 @@ def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float =
     earth_dt, gravity_dt = navigation_constants(rec)
     velocity_unit = noise_ug * P.UG * rec.dt  # velocity noise per sample at the nominal accelerometer noise
     gyro_unit = static_gyro_noise(rec, reference)
-    parts, kinds, index = [], [], []
+    parts, kinds, index, chains, spans, starts_flag = [], [], [], [], [], []
     plans, starts = [], {}
     for gi, group in enumerate(groups):
-        plan = plan_steps(rec, group, static_block_s, rotation_block)
+        plan = plan_steps(rec, group, static_block_s, rotation_step_s)
         plans.append(plan)
         start = group_alignment(rec, group, reference)
         starts[group] = start
@@ -223,9 +228,15 @@ def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float =
         weights = 1.0 / (np.sqrt(plan.samples_between) * velocity_unit)
         cols = list(np.flatnonzero(keep))
         parts.append(ca.vec(diffs[:, cols] @ ca.diag(ca.DM(weights[cols]))))
+        base = len(kinds)
         kinds += [0] * (3 * len(cols))
         index += [(group, "rotation step" if plan.after_rotation[k] else "velocity", int(k), axis)
                   for k in cols for axis in range(3)]
+        spans += [plan.samples_between[k] for k in cols for _ in range(3)]
+        starts_flag += [k == 0 for k in cols for _ in range(3)]
+        # consecutive differences share the white (quantisation) noise of the velocity between them
+        runs = np.split(np.arange(len(cols)), np.flatnonzero(np.diff(cols) != 1) + 1)
+        chains += [base + 3 * run + axis for run in runs for axis in range(3)]
         # mean gyro rate of each static segment against the Earth rate seen in the navigated attitude
         for seg_number in np.unique(plan.segment_of):
             cols_seg = plan.observed[plan.segment_of == seg_number]
@@ -237,11 +248,14 @@ def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float =
             parts.append((mean_rate - earth_in_body) * (np.sqrt(n_samples) / gyro_unit))
             kinds += [1] * 3
             index += [(group, "gyro", int(seg_number), axis) for axis in range(3)]
+            spans += [0.0] * 3
+            starts_flag += [False] * 3
     r = ca.vertcat(*parts)
     residuals = ca.Function("residuals", [w], [r])
     jacobian = ca.Function("residuals_jacobian", [w], [r, ca.jacobian(r, w)])
     return Problem(residuals, jacobian, n_var, r.shape[0], np.array(kinds), plans, reference, starts,
-                   velocity_unit, gyro_unit, time.perf_counter() - t0, index)
+                   velocity_unit, gyro_unit, time.perf_counter() - t0, index, chains, np.array(spans),
+                   np.array(starts_flag))
 
 
 def _solve_ipopt(problem: Problem, hessian: str, tolerance: float, max_iterations: int,
@@ -279,39 +293,99 @@ def _solve_ipopt(problem: Problem, hessian: str, tolerance: float, max_iteration
     return np.asarray(sol["x"]).ravel(), stats
 
 
-def variance_components(r: np.ndarray, jac: np.ndarray, kind: np.ndarray, kind_weights: np.ndarray,
-                        max_weights: np.ndarray | None = None, rounds: int = 5):
-    """Re-estimate the noise level of each residual kind from the fit, with Gauss-Newton steps.
+@dataclasses.dataclass
+class NoiseModel:
+    """Noise of the residuals, in their nominal units.
 
-    Each kind's variance is its weighted residual sum of squares over its degrees of freedom
-    (its count less its share of the hat matrix's trace).  Returns the step in the variables and the
-    new kind weights (1/sigma in the nominal units of each kind).
+    Velocity: a random walk of variance ``random_walk`` per sample (white accelerometer noise) plus
+    white noise of variance ``white`` on every observed velocity (integer pulse counters, pitfall 8);
+    consecutive differences then share the white part (covariance ``-white``).  Gyro residuals:
+    variance ``gyro`` per sample.
     """
+
+    random_walk: float = 1.0
+    white: float = 0.0
+    gyro: float = 1.0
+
+    def whitener(self, problem: Problem) -> Callable[[np.ndarray], np.ndarray]:
+        """A function applying ``Sigma^-1/2`` to residual vectors or Jacobians (rows = residuals)."""
+        n = problem.samples
+        factors = []
+        for chain in problem.chains:
+            # residual r_i = d_i / sqrt(n_i): Var = rw + white (2 or 1) / n_i, Cov(i, i+1) = -white / sqrt(n_i n_j)
+            ni = n[chain]
+            diag = self.random_walk + self.white * np.where(problem.from_start[chain], 1.0, 2.0) / ni
+            cov = np.diag(diag)
+            if len(chain) > 1 and self.white > 0:
+                off = -self.white / np.sqrt(ni[:-1] * ni[1:])
+                cov += np.diag(off, 1) + np.diag(off, -1)
+            factors.append((chain, np.linalg.cholesky(cov)))
+        gyro = problem.kind == 1
+        gyro_scale = 1.0 / np.sqrt(self.gyro)
+
+        def apply(x: np.ndarray) -> np.ndarray:
+            out = np.array(x, dtype=float, copy=True)
+            for chain, chol in factors:
+                out[chain] = np.linalg.solve(chol, x[chain])
+            out[gyro] = x[gyro] * gyro_scale
+            return out
+
+        return apply
+
+
+def estimate_noise(r: np.ndarray, jac: np.ndarray, problem: Problem, floors: NoiseModel, rounds: int = 6
+                   ) -> tuple[np.ndarray, NoiseModel]:
+    """Estimate the noise model from the fit and move to its generalised least-squares optimum.
+
+    Velocity: random-walk and white variances from the lag-0 and lag-1 moments of consecutive
+    residuals; gyro: residual sum of squares over its degrees of freedom (count less its share of
+    the hat matrix).  Each round takes a Gauss-Newton step with the current model from the solution
+    (the model is linear there).  Returns the step in the variables and the model.
+    """
+    model = NoiseModel()
     step = np.zeros(jac.shape[1])
-    weights = kind_weights.copy()
+    gyro = problem.kind == 1
     for _ in range(rounds):
-        wr = weights[kind]
-        jw, rw = jac * wr[:, None], (r + jac @ step) * wr
+        whiten = model.whitener(problem)
+        jw, rw = whiten(jac), whiten(r)
         u, s, vt = np.linalg.svd(jw, full_matrices=False)
-        step = step - vt.T @ ((u.T @ rw) / s)
-        rw = (r + jac @ step) * wr
+        step = -vt.T @ ((u.T @ rw) / s)
+        res = r + jac @ step
+        # lag 0: E[r_i^2] = rw + white * (2 or 1) / n_i;  lag 1: E[r_i r_j] = -white / sqrt(n_i n_j)
+        lag0 = np.concatenate([res[c] ** 2 for c in problem.chains])
+        inv_n = np.concatenate([np.where(problem.from_start[c], 1.0, 2.0) / problem.samples[c]
+                                for c in problem.chains])
+        lag1 = np.concatenate([res[c][:-1] * res[c][1:] * np.sqrt(problem.samples[c][:-1] * problem.samples[c][1:])
+                               for c in problem.chains])
+        white = max(-float(np.mean(lag1)), 0.0) if lag1.size else 0.0
+        random_walk = max(float(np.mean(lag0) - white * np.mean(inv_n)), floors.random_walk)
         leverage = np.sum(u**2, axis=1)
-        new = weights.copy()
-        for k in range(len(weights)):
-            mask = kind == k
-            dof = mask.sum() - leverage[mask].sum()
-            if mask.any() and dof > 0.5:
-                new[k] = weights[k] / np.sqrt(max(np.sum(rw[mask] ** 2) / dof, 1e-300))
-        if max_weights is not None:
-            new = np.minimum(new, max_weights)
-        if np.allclose(new, weights, rtol=1e-4):
+        dof = gyro.sum() - leverage[gyro].sum()
+        gyro_var = (max(float(np.sum((res[gyro] / np.sqrt(model.gyro)) ** 2) / dof) * model.gyro, floors.gyro)
+                    if gyro.any() and dof > 0.5 else model.gyro)
+        new = NoiseModel(random_walk, max(white, floors.white), gyro_var)
+        if np.allclose([new.random_walk, new.white, new.gyro], [model.random_walk, model.white, model.gyro],
+                       rtol=1e-3, atol=1e-12):
+            model = new
             break
-        weights = new
-    return step, weights
+        model = new
+    return step, model
+
+
+def default_static_block(rec: Recording) -> float:
+    """Seconds per static observation: 1 s, or 5 s for integer pulse counters.
+
+    Integer pulses add a white velocity noise of about one pulse to every observation (pitfall 8),
+    far from white when the pulse is much larger than the sensor noise; over 5 s blocks the random
+    walk of the accelerometer noise dominates it again, and a static base loses nothing by it.
+    """
+    integral = np.all(rec.accel == np.round(rec.accel)) and np.all(rec.gyro == np.round(rec.gyro))
+    return 5.0 if integral else 1.0
 
 
 def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian: str = "gauss-newton",
-                  static_block_s: float = 1.0, rotation_block: int = 4, use_rotation_steps: bool | str = "auto",
+                  static_block_s: float | None = None, rotation_step_s: float = 0.04,
+                  use_rotation_steps: bool | str = "auto",
                   tolerance: float = 1e-7, max_iterations: int = 100,
                   progress: Callable[[str], None] | None = None) -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
@@ -322,9 +396,10 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     initial : ParameterSet, optional
         Starting values and reference of the natural-unit variables; default the rough values.
     hessian : {"gauss-newton", "exact", "limited-memory"}
-    static_block_s, rotation_block : float, int
-        Step sizes: seconds per static block, samples per rotation step (4: a method error below
-        0.001 natural units on the paper's problem, see benchmarks/bench_nlp.py).
+    static_block_s, rotation_step_s : float
+        Step lengths: static blocks (default :func:`default_static_block`) and rotation steps (40 ms:
+        a method error below 0.001 natural units on the paper's problem, see benchmarks/bench_nlp.py;
+        the number of steps, hence the time, does not grow with the sample rate).
     use_rotation_steps : bool or "auto"
         Keep the velocity differences that span rotations.  ``"auto"`` keeps them unless they
         disagree with the static residuals (F-test, :data:`STEP_CONSISTENCY_LIMIT`): lever arms or
@@ -338,8 +413,10 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
         Ipopt fails to converge or the problem is rank deficient.
     """
     t_start = time.perf_counter()
+    if static_block_s is None:
+        static_block_s = default_static_block(rec)
     if use_rotation_steps == "auto":
-        result = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_block, True, tolerance,
+        result = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_step_s, True, tolerance,
                                max_iterations, progress)
         ratio = result.info["rotation_step_ratio"]
         if ratio <= STEP_CONSISTENCY_LIMIT:
@@ -349,52 +426,55 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
                    "refitted without them")
         if progress:
             progress(f"nlp: {message}")
-        refit = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_block, False, tolerance,
+        refit = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_step_s, False, tolerance,
                               max_iterations, progress)
         refit.info["warnings"] = refit.info.get("warnings", []) + [message]
         refit.wall_time = time.perf_counter() - t_start
         return refit
     initial = initial or rough_parameters(rec)
     reference = initial.values.copy()
-    problem = build_problem(rec, reference, static_block_s, rotation_block, use_rotation_steps)
+    problem = build_problem(rec, reference, static_block_s, rotation_step_s, use_rotation_steps)
     if progress:
         progress(f"nlp: graph of {sum(len(p.step_dt) for p in problem.groups)} steps, {problem.n_variables} "
                  f"variables, {problem.n_residuals} residuals built in {problem.build_time:.2f} s")
-    kind_weights = np.ones(len(RESIDUAL_KINDS))
-    z, stats = _solve_ipopt(problem, hessian, tolerance, max_iterations, progress, kind_weights)
+    z, stats = _solve_ipopt(problem, hessian, tolerance, max_iterations, progress, np.ones(len(RESIDUAL_KINDS)))
     if not stats["success"]:
         _check_rank(np.asarray(problem.jacobian(z)[1]))  # a rank deficiency is the likelier cause: name it
         raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} "
                                f"after {stats['iter_count']} iterations")
     r, jac = (np.asarray(m) for m in problem.jacobian(z))
     _check_rank(jac)
-    max_weights = np.array([problem.velocity_unit / (ACCEL_VRW_FLOOR * P.UG * np.sqrt(rec.dt)),
-                            problem.gyro_unit / (GYRO_ARW_FLOOR * np.pi / 180 / 60 / np.sqrt(rec.dt))])
-    step, kind_weights = variance_components(r.ravel(), jac, problem.kind, kind_weights, max_weights)
+    floors = NoiseModel((ACCEL_VRW_FLOOR * P.UG * np.sqrt(rec.dt) / problem.velocity_unit) ** 2, 0.0,
+                        (GYRO_ARW_FLOOR * np.pi / 180 / 60 / np.sqrt(rec.dt) / problem.gyro_unit) ** 2)
+    step, noise = estimate_noise(r.ravel(), jac, problem, floors)
     # the reweighting step is a fraction of a sigma, where the model is linear: update r, keep J
     z = z + step
     r = r.ravel() + jac @ step
-    wr = kind_weights[problem.kind]
-    covariance_w, rms = _covariance(jac * wr[:, None], r * wr)
+    whiten = noise.whitener(problem)
+    rw = whiten(r)
+    covariance_w, rms = _covariance(whiten(jac), rw)
     values = natural_to_parameters(z[: P.N_PARAMS], reference)
     scale = np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)  # d(params)/dz
     covariance = covariance_w[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
     start_offsets = {g: z[P.N_PARAMS + 3 * i: P.N_PARAMS + 3 * i + 3] for i, g in enumerate(rec.group_ids)}
     start_attitudes = {g: small_rotation(start_offsets[g] * ARCSEC) @ problem.start_attitudes[g]
                        for g in rec.group_ids}
-    noise = {"accel_noise_ug": problem.velocity_unit / kind_weights[0] / (P.UG * rec.dt),
-             "gyro_noise_deg_h": problem.gyro_unit / kind_weights[1] / (np.pi / 180 / 3600)}
+    pulse_white = np.sqrt(noise.white) * problem.velocity_unit  # m/s, white velocity noise per observation
+    noise = {"accel_noise_ug": np.sqrt(noise.random_walk) * problem.velocity_unit / (P.UG * rec.dt),
+             "gyro_noise_deg_h": np.sqrt(noise.gyro) * problem.gyro_unit / (np.pi / 180 / 3600),
+             "velocity_white_mps": pulse_white}
     if progress:
         progress(f"nlp: noise from the fit: accelerometers {noise['accel_noise_ug']:.3g} ug, "
-                 f"gyros {noise['gyro_noise_deg_h']:.3g} deg/h per sample")
+                 f"gyros {noise['gyro_noise_deg_h']:.3g} deg/h per sample, white velocity noise "
+                 f"{noise['velocity_white_mps']:.3g} m/s (pulse quantisation)")
     steps = np.array([kind == "rotation step" for _, kind, _, _ in problem.residual_index])
     plain = (problem.kind == 0) & ~steps
-    ratio = (float(np.mean((r * wr)[steps] ** 2) / np.mean((r * wr)[plain] ** 2))
+    ratio = (float(np.mean(rw[steps] ** 2) / np.mean(rw[plain] ** 2))
              if steps.any() and plain.any() else 1.0)
     info = {"ipopt_iterations": int(stats["iter_count"]), "rotation_step_ratio": ratio,
             "rotation_steps_used": bool(use_rotation_steps), "warnings": [], "build_time": problem.build_time,
             "residuals": problem.n_residuals, "start_offsets_arcsec": start_offsets,
-            "start_attitudes": start_attitudes, "residual_vector": r * wr,
+            "start_attitudes": start_attitudes, "residual_vector": rw,
             "residual_index": problem.residual_index, "residual_kind": problem.kind, "plans": problem.groups,
             "covariance_natural": covariance_w, "hessian": hessian, **noise}
     return CalibrationResult("nlp", P.ParameterSet(values, covariance=covariance), initial,

@@ -8,7 +8,9 @@ Each iteration:
    velocity errors with ``a + b tau + c tau^2`` and the up velocity error with
    ``a + b tau`` (``tau`` from the start of the segment); the linear and
    quadratic coefficients (north quadratic optional) are the equations,
-   5 per rotation, 45 for the paper's 9 rotations;
+   5 per rotation, 45 for the paper's 9 rotations; by default also the slope
+   of the up velocity in each group's alignment segment, which the paper
+   leaves unused (48 equations; ``paper_equations=True`` for exactly 45);
 3. the same fits applied to the sensitivities of the velocity error to the
    21 error terms (``T_g, eps, T_a, Delta``), propagated through the linear
    error model (eqs. 13-21) along the navigated attitude with the alignment
@@ -22,7 +24,7 @@ Weights: the equations of one segment and axis are whitened with the
 covariance of the fitted coefficients under a velocity random walk (white
 accelerometer noise), so linear and quadratic terms count by their real
 precision.  ``sigma`` of the table is the formal standard error of this
-weighted fit, scaled by the residual variance (45 - 21 = 24 degrees of
+weighted fit, scaled by the residual variance (48 - 21 = 27 degrees of
 freedom for the paper's schedule); it does not include the correlation
 between segments through the gyro-noise tilt random walk.
 """
@@ -70,8 +72,14 @@ def _coefficient_operator(n: int, dt: float, degree: int) -> tuple[np.ndarray, n
     return pinv, cov
 
 
-def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = True):
+def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = True,
+                    alignment_up: bool = True):
     """The paper's equations for the current parameters: ``(A, b, labels)``, already whitened.
+
+    ``alignment_up`` adds the slope of the up velocity in each group's first (alignment) static
+    segment: the alignment takes only the tilt from it, and without it a schedule whose other
+    positions never turn an accelerometer up (the paper's y axis) separates its bias and scale
+    factor poorly.
 
     ``A`` (m, 21) maps the error terms (SI, ordered like :data:`parameters.NAMES`) to the whitened
     coefficients, ``b`` (m,) are the whitened coefficients of the navigated velocity.
@@ -81,18 +89,23 @@ def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = 
         nav = navigate_group(rec, group, params)
         sens = velocity_sensitivity(rec, nav, params)
         segs = rec.group_segments(group)
-        for rotation, seg in zip(segs[1::2], segs[2::2]):
+        statics = ([segs[0]] if alignment_up else []) + list(segs[2::2])
+        for seg in statics:
             sl = rec.segment_samples(seg)
             local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
             n = local.stop - local.start
+            axes = "U" if seg is segs[0] else "ENU"
             for axis, name in enumerate("ENU"):
+                if name not in axes:
+                    continue
                 degree = 1 if name == "U" else 2
                 ops, cov = _coefficient_operator(n, rec.dt, degree)
                 if name == "N" and not north_quadratic:
                     ops, cov = ops[:1], cov[:1, :1]
                 whiten = np.linalg.inv(np.linalg.cholesky(cov))
-                velocity = nav.velocity[local, axis] - nav.velocity[local.start - 1, axis]
-                sensitivity = sens[local, axis, :] - sens[local.start - 1, axis, :]
+                before = local.start - 1
+                velocity = nav.velocity[local, axis] - (nav.velocity[before, axis] if before >= 0 else 0.0)
+                sensitivity = sens[local, axis, :] - (sens[before, axis, :] if before >= 0 else 0.0)
                 rows.append(whiten @ (ops @ sensitivity))
                 rhs.append(whiten @ (ops @ velocity))
                 kinds = ["slope", "curvature"][: len(ops)]
@@ -124,7 +137,7 @@ def solve_equations(a: np.ndarray, b: np.ndarray):
 
 
 def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_iterations: int = 10,
-                  tolerance: float = 0.01, north_quadratic: bool = True,
+                  tolerance: float = 0.01, north_quadratic: bool = True, paper_equations: bool = False,
                   progress: Callable[[str], None] | None = None) -> CalibrationResult:
     """Calibrate a recording with the paper's iterative least squares.
 
@@ -138,6 +151,9 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
         Stop when every correction is below ``tolerance`` times its sigma.
     north_quadratic : bool
         Use the north quadratic term (the paper allows leaving it out).
+    paper_equations : bool
+        Exactly the paper's 5 equations per rotation; by default the up-velocity slope of each
+        group's alignment segment is added (see :func:`build_equations`).
     progress : callable, optional
         Receives one line per iteration.
 
@@ -153,7 +169,7 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
     corrections = []
     converged = False
     for iteration in range(1, max_iterations + 1):
-        a, b, labels = build_equations(rec, params, north_quadratic)
+        a, b, labels = build_equations(rec, params, north_quadratic, alignment_up=not paper_equations)
         x, cov, rms = solve_equations(a, b)
         params = P.apply_error_estimate(params, x)
         history.append(params.copy())

@@ -130,3 +130,25 @@ def test_alternation_and_group_order_are_checked(written, tmp_path):
     path.write_text("[[segments]]".join(block))
     with pytest.raises(RecordingError, match=r"segment 9 .*follows a static segment"):
         read_recording(path)
+
+
+def test_written_recording_follows_the_format_for_an_independent_reader(written):
+    """Read our output the way another program that knows only recording-format.md would."""
+    import csv
+    import tomllib
+
+    sim, path = written
+    doc = tomllib.loads(path.read_text())
+    assert doc["format"] == "sins-recording/1" and isinstance(doc["name"], str)
+    assert set(doc["site"]) >= {"latitude_deg", "height_m"} and doc["imu"]["rate_hz"] == 100.0
+    for seg in doc["segments"]:
+        assert seg["kind"] in ("static", "rotation") and seg["end_s"] > seg["start_s"]
+        assert ("orientation" in seg) if seg["kind"] == "static" else {"axis", "angle_deg"} <= set(seg)
+    with open(path.parent / doc["data"], newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == ["time", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"]
+    times = np.array([float(r[0]) for r in rows[1:]])
+    dt = 1.0 / doc["imu"]["rate_hz"]
+    # the first interval ends at time[0] and is 1/rate long; time is uniform
+    assert times[0] == pytest.approx(dt) and np.allclose(np.diff(times), dt)
+    assert float(rows[1][5]) == sim.recording.accel[0, 1]

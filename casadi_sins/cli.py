@@ -137,6 +137,53 @@ def cmd_compare(args) -> int:
     return 0
 
 
+def cmd_analyze(args) -> int:
+    from .analysis import predict_file, write_analysis
+
+    predictions = []
+    for path in args.inputs:
+        t0 = time.perf_counter()
+        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h)
+        predictions.append(pred)
+        print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
+              f"{', '.join(pred.weak) or 'none'}")
+    table = write_analysis(predictions, args.out)
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"wrote the predicted sigma tables and plot to {args.out}")
+    return 0
+
+
+def cmd_montecarlo(args) -> int:
+    from tqdm import tqdm
+
+    from . import montecarlo as MC
+    from .analysis import predict_problem
+    from .problem import load_problem
+    from .report import write_frame
+
+    problem = load_problem(args.problem)
+    out = Path(args.out)
+    predicted = predict_problem(problem).sigma_natural
+    seeds = range(args.first_seed, args.first_seed + args.runs)
+    t0 = time.perf_counter()
+    with tqdm(total=args.runs, desc=f"monte carlo {problem.name}", unit="run") as bar:
+        rows = MC.run(problem, seeds, args.solvers, args.workers,
+                      progress=lambda k, n: bar.update(k - bar.n), scheduler=args.dask)
+    elapsed = time.perf_counter() - t0
+    summary = MC.with_prediction(MC.summary(rows), predicted)
+    stem = out / f"{problem.name}-montecarlo"
+    write_frame(rows, out / f"{problem.name}-montecarlo-runs")
+    cols = ["solver", "parameter", "unit", "rms_error", "mean_sigma", "predicted_sigma", "rms_over_predicted",
+            "rms_over_sigma", "max_abs_z", "runs"]
+    write_frame(summary[cols], stem, f"{problem.name}: {args.runs} runs in {elapsed:.0f} s; RMS error against "
+                f"the solver's sigma and the predicted sigma (natural units)")
+    MC.plot_summary(summary, stem.with_suffix(".png"))
+    failed = rows[rows["failed"] != ""] if "failed" in rows else rows.iloc[:0]
+    print(summary[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"{args.runs} runs in {elapsed:.1f} s ({len(failed)} failed); wrote {stem}.csv, .md, .png")
+    return 0
+
+
 def cmd_demo(args) -> int:
     """Simulate the default problem and compare both solvers on it, into ``results/``."""
     from .compare import compare
@@ -211,6 +258,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--truth", help="truth table: errors against it in natural units")
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("analyze", help="predicted accuracy of schedules before any data (problem or recording)")
+    p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--accel-noise-ug", type=float, help="accelerometer white noise per sample (default: the "
+                   "problem's, or 50 for a recording)")
+    p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
+                   "problem's, or 0.01 for a recording)")
+    p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--runs", type=int, default=50)
+    p.add_argument("--first-seed", type=int, default=10000)
+    p.add_argument("--solvers", nargs="+", default=["nlp", "ils"], choices=["nlp", "ils"])
+    p.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address, or 'local'")
+    p.add_argument("--out", default="results", help="output folder (default results/)")
+    p.set_defaults(func=cmd_montecarlo)
 
     p = sub.add_parser("demo", help="simulate the paper's experiment and compare both solvers into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")

@@ -58,23 +58,98 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",)) -> 
 
 
 def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",), workers: int | None = None,
-        progress: Callable[[int, int], None] | None = None) -> pd.DataFrame:
-    """Run seeds in parallel on local processes; rows of :func:`run_seed`."""
-    workers = workers or os.cpu_count() or 1
+        progress: Callable[[int, int], None] | None = None, scheduler: str | None = None) -> pd.DataFrame:
+    """Run seeds in parallel; rows of :func:`run_seed`.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local processes (default: one per core).
+    scheduler : str, optional
+        A Dask distributed scheduler address (``tcp://host:8786``), or ``"local"`` for a Dask
+        cluster on this machine: the runs are submitted there instead (needs ``dask[distributed]``).
+    """
     rows: list[dict] = []
+    if scheduler:
+        try:
+            from dask.distributed import Client, LocalCluster, as_completed
+        except ImportError:
+            raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
+                               "pip install 'casadi-sins[cluster]'") from None
+        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                               processes=True) if scheduler == "local" else None
+        with Client(cluster if cluster is not None else scheduler) as client:
+            futures = [client.submit(run_seed, problem, seed, tuple(solvers), pure=False) for seed in seeds]
+            for k, fut in enumerate(as_completed(futures), 1):
+                rows += fut.result()
+                if progress:
+                    progress(k, len(seeds))
+        if cluster is not None:
+            cluster.close()
+        return pd.DataFrame(rows)
+    workers = workers or os.cpu_count() or 1
     if workers == 1:
         for k, seed in enumerate(seeds, 1):
             rows += run_seed(problem, seed, solvers)
             if progress:
                 progress(k, len(seeds))
-    else:
-        with ProcessPoolExecutor(workers) as pool:
-            futures = [pool.submit(run_seed, problem, seed, tuple(solvers)) for seed in seeds]
-            for k, fut in enumerate(futures, 1):
-                rows += fut.result()
-                if progress:
-                    progress(k, len(seeds))
+        return pd.DataFrame(rows)
+    with ProcessPoolExecutor(workers, initializer=_single_threaded) as pool:
+        futures = [pool.submit(run_seed, problem, seed, tuple(solvers)) for seed in seeds]
+        for k, fut in enumerate(as_completed_futures(futures), 1):
+            rows += fut.result()
+            if progress:
+                progress(k, len(seeds))
     return pd.DataFrame(rows)
+
+
+def as_completed_futures(futures):
+    from concurrent.futures import as_completed
+
+    return as_completed(futures)
+
+
+def _single_threaded():
+    """One thread per worker process: the runs are the parallelism (no BLAS oversubscription)."""
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+
+
+def with_prediction(summary_frame: pd.DataFrame, predicted_sigma: np.ndarray) -> pd.DataFrame:
+    """Add the predicted sigma (natural units) and RMS/predicted to a :func:`summary`."""
+    out = summary_frame.copy()
+    out["predicted_sigma"] = out["parameter"].map(dict(zip(P.NAMES, predicted_sigma)))
+    out["rms_over_predicted"] = out["rms_error"] / out["predicted_sigma"]
+    return out
+
+
+def plot_summary(summary_frame: pd.DataFrame, path) -> object:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .report import save_figure
+
+    fig, axes = plt.subplots(2, 3, figsize=(14, 7))
+    for ax, (label, sl, unit) in zip(axes.ravel(), P.GROUPS):
+        names = list(P.NAMES[sl])
+        x = np.arange(len(names))
+        solvers = list(dict.fromkeys(summary_frame["solver"]))
+        width = 0.8 / (len(solvers) + 1)
+        for k, solver in enumerate(solvers):
+            part = summary_frame[summary_frame["solver"] == solver].set_index("parameter").loc[names]
+            ax.bar(x + k * width, part["rms_error"], width, label=f"{solver} RMS error")
+        if "predicted_sigma" in summary_frame:
+            part = summary_frame.drop_duplicates("parameter").set_index("parameter").loc[names]
+            ax.bar(x + len(solvers) * width, part["predicted_sigma"], width, color="0.6", label="predicted sigma")
+        ax.set_xticks(x + width * len(solvers) / 2, [n.split("_", 2)[-1] for n in names])
+        ax.set_title(f"{label} ({unit})", fontsize=10)
+        ax.set_ylim(bottom=0)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Monte Carlo: RMS error per parameter against the predicted sigma")
+    fig.tight_layout()
+    return save_figure(fig, path)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:

@@ -1,0 +1,147 @@
+"""Predicted accuracy of a schedule, before any data: the covariance of the NLP's linearisation.
+
+For a problem file the experiment is simulated without noise at its truth; for a recording its own
+schedule and data are used around the rough initial values.  The NLP's residual Jacobian there,
+weighted with the stated noise (accelerometer and gyro white noise per sample, and the white velocity
+noise of integer pulses), gives the covariance ``(J^T W J)^-1`` that an efficient estimate reaches:
+the Cramer-Rao bound of this noise model.  No Monte Carlo is needed (Guan et al., spec section 4).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import parameters as P
+from .initial import rough_parameters
+from .nlp import NoiseModel, build_problem, default_static_block
+from .problem import Problem, load_problem
+from .recording import Recording, read_recording
+from .report import save_figure, write_frame
+from .simulate import simulate
+from .units import DEG_PER_H, UG
+
+#: A parameter is reported weakly observable when its predicted sigma exceeds this many times the
+#: best one of its group (natural units), or these absolute levels.
+WEAK_RATIO = 3.0
+WEAK_LEVEL = {"ug": 5.0, "ppm": 5.0, "arcsec": 5.0, "deg/h": 0.01}
+
+
+@dataclasses.dataclass
+class Prediction:
+    name: str
+    nominal: P.ParameterSet  # nominal values with the predicted covariance
+    sigma_natural: np.ndarray
+    weak: list[str]
+    accel_noise_ug: float
+    gyro_noise_deg_h: float
+
+    def frame(self) -> pd.DataFrame:
+        """Parameter-table layout (``parameter,unit,value,sigma``) plus natural units."""
+        frame = self.nominal.to_frame()[["parameter", "unit", "value", "sigma"]]
+        frame["natural unit"] = P.NATURAL_UNITS
+        frame["sigma (natural)"] = self.sigma_natural
+        frame["weakly observable"] = [n in self.weak for n in P.NAMES]
+        return frame
+
+
+def predict(rec: Recording, nominal: np.ndarray, accel_noise_ug: float, gyro_noise_deg_h: float,
+            quantized: bool | None = None, name: str | None = None) -> Prediction:
+    """Predicted covariance of the 21 parameters for a recording's schedule and a noise level."""
+    block = default_static_block(rec)
+    built = build_problem(rec, nominal, static_block_s=block)
+    _, jac = built.jacobian(np.zeros(built.n_variables))
+    jac = np.asarray(jac)
+    rate_noise = gyro_noise_deg_h * DEG_PER_H
+    quantized = bool(block > 1.0) if quantized is None else quantized
+    white = 0.0
+    if quantized:  # a pulse of velocity quantisation, uniform: S^2 / 12 per observation
+        white = float(np.mean(nominal[P.ACCEL_SCALE] ** 2) / 12.0) / built.velocity_unit**2
+    model = NoiseModel((accel_noise_ug / 50.0) ** 2, white, (rate_noise / built.gyro_unit) ** 2)
+    jw = model.whitener(built)(jac)
+    u, s, vt = np.linalg.svd(jw, full_matrices=False)
+    cov_z = (vt.T / s**2) @ vt
+    scale = np.where(P.SCALE_MASK, nominal * 1e-6, P.NATURAL_SCALE)
+    covariance = cov_z[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
+    sigma_nat = np.sqrt(np.diag(cov_z)[: P.N_PARAMS])
+    weak = []
+    for _, sl, unit in P.GROUPS:
+        best = sigma_nat[sl].min()
+        for i in range(sl.start, sl.stop):
+            if sigma_nat[i] > WEAK_RATIO * best or sigma_nat[i] > WEAK_LEVEL[unit]:
+                weak.append(P.NAMES[i])
+    return Prediction(name or rec.name, P.ParameterSet(nominal, covariance=covariance), sigma_nat, weak,
+                      accel_noise_ug, gyro_noise_deg_h)
+
+
+def predict_problem(problem: Problem) -> Prediction:
+    """Predicted accuracy of a problem's schedule at its stated noise (noise-free simulation at truth)."""
+    sim = simulate(problem, seed=0, noise=False)
+    dev = problem.deviations
+    return predict(sim.recording, problem.truth.values, dev.accel_noise_ug, dev.gyro_noise_deg_h,
+                   quantized=dev.quantize, name=problem.name)
+
+
+def predict_file(path: str | Path, accel_noise_ug: float | None = None,
+                 gyro_noise_deg_h: float | None = None) -> Prediction:
+    """Predicted accuracy for a problem file or a recording (TOML), told apart by their ``format``."""
+    path = Path(path)
+    with open(path, "rb") as handle:
+        fmt = tomllib.load(handle).get("format", "")
+    if fmt.startswith("casadi-sins-problem"):
+        problem = load_problem(path)
+        changes = {k: v for k, v in (("accel_noise_ug", accel_noise_ug), ("gyro_noise_deg_h", gyro_noise_deg_h))
+                   if v is not None}
+        return predict_problem(problem.with_changes(**changes) if changes else problem)
+    rec = read_recording(path)
+    return predict(rec, rough_parameters(rec).values, accel_noise_ug if accel_noise_ug is not None else 50.0,
+                   gyro_noise_deg_h if gyro_noise_deg_h is not None else 0.01)
+
+
+def comparison_frame(predictions: list[Prediction]) -> pd.DataFrame:
+    frame = pd.DataFrame({"parameter": P.NAMES, "natural unit": P.NATURAL_UNITS})
+    for pred in predictions:
+        frame[f"{pred.name} sigma"] = pred.sigma_natural
+        frame[f"{pred.name} weak"] = [n in pred.weak for n in P.NAMES]
+    return frame
+
+
+def plot_predictions(predictions: list[Prediction], path: str | Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(14, 7))
+    width = 0.8 / len(predictions)
+    for ax, (label, sl, unit) in zip(axes.ravel(), P.GROUPS):
+        names = [n.split("_", 2)[-1] for n in P.NAMES[sl]]
+        x = np.arange(len(names))
+        for k, pred in enumerate(predictions):
+            ax.bar(x + k * width, pred.sigma_natural[sl], width, label=pred.name)
+        ax.set_xticks(x + width * (len(predictions) - 1) / 2, names)
+        ax.set_title(f"{label} ({unit}, 1 sigma)", fontsize=10)
+        ax.set_ylim(bottom=0)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Predicted accuracy of each schedule (covariance of the NLP's linearisation)")
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.DataFrame:
+    out_dir = Path(out_dir)
+    for pred in predictions:
+        P.write_table(out_dir / f"{pred.name}-predicted.csv", pred.nominal)
+        write_frame(pred.frame(), out_dir / f"{pred.name}-predicted-natural",
+                    f"{pred.name}: predicted 1-sigma at {pred.accel_noise_ug:g} ug and {pred.gyro_noise_deg_h:g} deg/h "
+                    "white noise per sample")
+    table = comparison_frame(predictions)
+    if len(predictions) > 1:
+        write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)")
+    plot_predictions(predictions, out_dir / ("schedules-predicted.png" if len(predictions) > 1
+                                             else f"{predictions[0].name}-predicted.png"))
+    return table

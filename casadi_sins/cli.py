@@ -184,6 +184,21 @@ def cmd_montecarlo(args) -> int:
     return 0
 
 
+def cmd_navcheck(args) -> int:
+    from .navcheck import navigation_check, write_navigation_check
+    from .parameters import read_table
+    from .problem import load_problem
+
+    problem = load_problem(args.problem)
+    tables = {Path(p).stem: read_table(p).values for p in args.params}
+    runs, table = navigation_check(problem, tables, seed=args.seed, duration_s=args.duration_s,
+                                   align_s=args.align_s)
+    write_navigation_check(runs, table, args.out, problem.name)
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"wrote {args.out}/{problem.name}-navcheck.{{csv,md,png}}")
+    return 0
+
+
 def cmd_demo(args) -> int:
     """Simulate the default problem and compare both solvers on it, into ``results/``."""
     from .compare import compare
@@ -196,12 +211,19 @@ def cmd_demo(args) -> int:
     sim = simulate(problem, seed=args.seed)
     rec_path = write_simulation(sim, out / "recordings")
     print(f"simulated {problem.name} (seed {args.seed}): {rec_path} in {time.perf_counter() - t0:.1f} s")
-    _, table, summary = compare(sim.recording, out, sim.truth, progress=print)
+    results, table, summary = compare(sim.recording, out, sim.truth, progress=print)
     print(summary.drop(columns=["sigma means"]).to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    from .navcheck import navigation_check, write_navigation_check
+
+    runs, nav_table = navigation_check(problem, {name: res.parameters.values for name, res in results.items()},
+                                       seed=args.seed)
+    write_navigation_check(runs, nav_table, out, sim.recording.name)
+    print("navigation check, 1 h static free-inertial after alignment:")
+    print(nav_table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     print(f"wrote {out}/{sim.recording.name}-compare.{{csv,md}}, -compare-summary.{{csv,md}}, "
-          f"-compare-residuals.png and the parameter tables")
+          f"-compare-residuals.png, -navcheck.{{csv,md,png}} and the parameter tables")
     return 0
 
 
@@ -277,6 +299,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address, or 'local'")
     p.add_argument("--out", default="results", help="output folder (default results/)")
     p.set_defaults(func=cmd_montecarlo)
+
+    p = sub.add_parser("navcheck", help="1 h free-inertial navigation of a fresh static recording per table")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (sensors, truth, noise; default paper)")
+    p.add_argument("--params", nargs="+", required=True, help="parameter tables to check")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--duration-s", type=float, default=3600.0)
+    p.add_argument("--align-s", type=float, default=300.0)
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_navcheck)
 
     p = sub.add_parser("demo", help="simulate the paper's experiment and compare both solvers into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")

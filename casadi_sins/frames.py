@@ -150,16 +150,30 @@ def earth_rate_enu(latitude_rad: float) -> np.ndarray:
     return EARTH_RATE * np.array([0.0, np.cos(latitude_rad), np.sin(latitude_rad)])
 
 
-def normal_gravity(latitude_rad: float, height_m: float = 0.0) -> float:
-    """WGS-84 normal gravity magnitude (Somigliana, second-order height correction), m/s^2."""
-    s2 = np.sin(latitude_rad) ** 2
-    g0 = _GAMMA_E * (1.0 + _SOMIGLIANA_K * s2) / np.sqrt(1.0 - _WGS84_E2 * s2)
+def _math(*values):
+    """CasADi for symbolic arguments, NumPy otherwise: the Earth model is written once for both."""
+    import casadi as ca
+
+    return ca if any(isinstance(v, (ca.SX, ca.MX)) for v in values) else np
+
+
+def normal_gravity(latitude_rad, height_m=0.0):
+    """WGS-84 normal gravity magnitude (Somigliana, second-order height correction), m/s^2.
+
+    Numbers give a float; CasADi symbols give an expression.
+    """
+    xp = _math(latitude_rad, height_m)
+    s2 = xp.sin(latitude_rad) ** 2
+    g0 = _GAMMA_E * (1.0 + _SOMIGLIANA_K * s2) / xp.sqrt(1.0 - _WGS84_E2 * s2)
     a = _WGS84_A
-    return float(
-        g0
-        * (
-            1.0
-            - 2.0 / a * (1.0 + _WGS84_F + _WGS84_M - 2.0 * _WGS84_F * s2) * height_m
-            + 3.0 * height_m**2 / a**2
-        )
-    )
+    g = g0 * (1.0 - 2.0 / a * (1.0 + _WGS84_F + _WGS84_M - 2.0 * _WGS84_F * s2) * height_m
+              + 3.0 * height_m**2 / a**2)
+    return g if xp is not np else float(g)
+
+
+def earth_radii(latitude_rad):
+    """WGS-84 meridian and prime-vertical radii of curvature ``(R_M, R_N)``, m (numbers or CasADi)."""
+    xp = _math(latitude_rad)
+    w2 = 1.0 - _WGS84_E2 * xp.sin(latitude_rad) ** 2
+    r_n = _WGS84_A / xp.sqrt(w2)
+    return r_n * (1.0 - _WGS84_E2) / w2, r_n

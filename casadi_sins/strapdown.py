@@ -92,6 +92,27 @@ def quat_to_dcm_np(q: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- the step
+def corrected_increments(dtheta, dv, dtheta_prev, dv_prev):
+    """Rotation vector and body velocity increment of one step: coning, rotation (1st and 2nd order) and
+    sculling corrections from the current and previous compensated increments."""
+    phi = dtheta + ca.cross(dtheta_prev, dtheta) / 12
+    rotation = ca.cross(dtheta, dv) / 2 + ca.cross(dtheta, ca.cross(dtheta, dv)) / 6
+    dv_body = dv + rotation + (ca.cross(dtheta_prev, dv) + ca.cross(dv_prev, dtheta)) / 12
+    return phi, dv_body
+
+
+def attitude_update(q, phi, nav_rate_dt):
+    """``q_k = q(-w_in dt) * q_{k-1} * q(phi)``, normalised."""
+    q_next = quat_multiply(quat_multiply(quat_from_rotvec(-nav_rate_dt), q), quat_from_rotvec(phi))
+    return q_next / ca.norm_2(q_next)
+
+
+def specific_force_increment(q, dv_body, nav_rate_dt):
+    """``(I - [w_in dt x]/2) C(q_{k-1}) dv_body``: the n-frame turn at the middle of the interval."""
+    dv_nav = quat_to_dcm(q) @ dv_body
+    return dv_nav - ca.cross(nav_rate_dt, dv_nav) / 2
+
+
 def step_expr(state, dtheta, dv, earth_rate_dt, gravity_dt, previous_scale=1):
     """Next navigation state from the current one and compensated increments (CasADi).
 
@@ -99,16 +120,10 @@ def step_expr(state, dtheta, dv, earth_rate_dt, gravity_dt, previous_scale=1):
     uniform steps, 0 where the step length changes (block-summed static segments).
     """
     q, v = state[Q], state[V]
-    dtheta_prev, dv_prev = previous_scale * state[PREV_DTHETA], previous_scale * state[PREV_DV]
-    phi = dtheta + ca.cross(dtheta_prev, dtheta) / 12
-    rotation = ca.cross(dtheta, dv) / 2 + ca.cross(dtheta, ca.cross(dtheta, dv)) / 6
-    dv_body = dv + rotation + (ca.cross(dtheta_prev, dv) + ca.cross(dv_prev, dtheta)) / 12
-    dv_nav = quat_to_dcm(q) @ dv_body
-    dv_nav = dv_nav - ca.cross(earth_rate_dt, dv_nav) / 2
-    v_next = v + dv_nav + gravity_dt
-    q_next = quat_multiply(quat_multiply(quat_from_rotvec(-earth_rate_dt), q), quat_from_rotvec(phi))
-    q_next = q_next / ca.norm_2(q_next)
-    return ca.vertcat(q_next, v_next, dtheta, dv)
+    phi, dv_body = corrected_increments(dtheta, dv, previous_scale * state[PREV_DTHETA],
+                                        previous_scale * state[PREV_DV])
+    v_next = v + specific_force_increment(q, dv_body, earth_rate_dt) + gravity_dt
+    return ca.vertcat(attitude_update(q, phi, earth_rate_dt), v_next, dtheta, dv)
 
 
 @functools.lru_cache(maxsize=None)

@@ -199,6 +199,37 @@ def cmd_navcheck(args) -> int:
     return 0
 
 
+def cmd_budget(args) -> int:
+    import numpy as np
+
+    from .analysis import predict_problem
+    from .budget import error_budget, write_budget
+    from .frames import orientation_to_dcm
+    from .parameters import read_table
+    from .problem import load_problem
+
+    problem = load_problem(args.problem)
+    if args.params:
+        table = read_table(args.params)
+        if table.sigma is None:
+            raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
+        nominal, covariance = table.values, np.diag(np.nan_to_num(table.sigma) ** 2)
+        source = f"{args.params} (sigma only: correlations between parameters not known)"
+    else:
+        pred = predict_problem(problem)
+        nominal, covariance = pred.nominal.values, pred.nominal.covariance
+        source = f"the predicted covariance of {problem.name}'s schedule"
+    dev = problem.deviations
+    budget = error_budget(covariance, nominal, orientation_to_dcm(args.orientation), problem.site.latitude,
+                          problem.site.height, problem.site.g, dev.accel_noise_ug, dev.gyro_noise_deg_h,
+                          problem.rate_hz, duration_s=args.hours * 3600.0)
+    table = write_budget(budget, args.out, problem.name)
+    print(f"parameter uncertainty from {source}")
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(f"wrote {args.out}/{problem.name}-budget.{{csv,md,png}}")
+    return 0
+
+
 def cmd_demo(args) -> int:
     """Simulate the default problem and compare both solvers on it, into ``results/``."""
     from .compare import compare
@@ -222,8 +253,18 @@ def cmd_demo(args) -> int:
     write_navigation_check(runs, nav_table, out, sim.recording.name)
     print("navigation check, 1 h static free-inertial after alignment:")
     print(nav_table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    from .budget import error_budget, write_budget
+    from .frames import orientation_to_dcm
+
+    nlp_params = results["nlp"].parameters
+    dev = problem.deviations
+    budget = error_budget(nlp_params.covariance, nlp_params.values, orientation_to_dcm("ENU"),
+                          problem.site.latitude, problem.site.height, problem.site.g, dev.accel_noise_ug,
+                          dev.gyro_noise_deg_h, problem.rate_hz)
+    print("error budget of static navigation with the NLP's parameters (1 sigma, m):")
+    print(write_budget(budget, out, sim.recording.name).to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     print(f"wrote {out}/{sim.recording.name}-compare.{{csv,md}}, -compare-summary.{{csv,md}}, "
-          f"-compare-residuals.png, -navcheck.{{csv,md,png}} and the parameter tables")
+          f"-compare-residuals.png, -navcheck.{{csv,md,png}}, -budget.{{csv,md,png}} and the parameter tables")
     return 0
 
 
@@ -308,6 +349,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--align-s", type=float, default=300.0)
     p.add_argument("--out", required=True)
     p.set_defaults(func=cmd_navcheck)
+
+    p = sub.add_parser("budget", help="static navigation error over 1 h and 24 h by source, by covariance")
+    p.add_argument("problem", nargs="?", default=None, help="problem file: site, sensors, noise (default paper)")
+    p.add_argument("--params", help="calibrated parameter table with sigma (default: the schedule's predicted "
+                   "covariance)")
+    p.add_argument("--orientation", default="ENU", help="orientation of the unit while navigating")
+    p.add_argument("--hours", type=float, default=24.0)
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_budget)
 
     p = sub.add_parser("demo", help="simulate the paper's experiment and compare both solvers into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")

@@ -11,7 +11,7 @@ from . import parameters as P
 from .recording import Recording
 from .report import natural_sigma, save_figure, write_frame
 from .result import CalibrationResult
-from .strapdown import navigate
+from .strapdown import navigate, static_velocities
 
 
 def static_residuals(rec: Recording, result: CalibrationResult) -> dict[int, tuple[np.ndarray, np.ndarray]]:
@@ -21,16 +21,7 @@ def static_residuals(rec: Recording, result: CalibrationResult) -> dict[int, tup
     where it has them; the ILS navigates from its alignment, as it does in its own iteration.
     """
     navs = navigate(rec, result.parameters.values, result.info.get("start_attitudes"))
-    out = {}
-    for nav in navs:
-        for seg in rec.group_segments(nav.group):
-            if not seg.is_static:
-                continue
-            sl = rec.segment_samples(seg)
-            local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
-            v = nav.velocity[local]
-            out[seg.number] = (nav.time[local], v - v[0])
-    return out
+    return {seg.number: (t, v - v[0]) for seg, t, v in static_velocities(rec, navs)}
 
 
 def comparison_table(results: dict[str, CalibrationResult], truth: P.ParameterSet | None = None) -> pd.DataFrame:

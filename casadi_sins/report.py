@@ -11,7 +11,7 @@ import pandas as pd
 from . import parameters as P
 from .io import atomic_write_bytes, atomic_write_text
 from .recording import Recording
-from .strapdown import GroupNavigation
+from .strapdown import GroupNavigation, static_velocities
 
 
 def recording_summary(rec: Recording) -> str:
@@ -32,19 +32,12 @@ def recording_summary(rec: Recording) -> str:
 def static_velocity_table(rec: Recording, navs: list[GroupNavigation]) -> pd.DataFrame:
     """Per static segment: velocity at its end and mean slope (ENU), m/s and ug-equivalent."""
     rows = []
-    for nav in navs:
-        for seg in rec.group_segments(nav.group):
-            if not seg.is_static:
-                continue
-            sl = rec.segment_samples(seg)
-            local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
-            t = nav.time[local] - nav.time[local][0]
-            v = nav.velocity[local]
-            slope = np.polyfit(t, v, 1)[0]
-            rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.orientation,
-                         "v_east_mps": v[-1, 0], "v_north_mps": v[-1, 1], "v_up_mps": v[-1, 2],
-                         "slope_east_ug": slope[0] / P.UG, "slope_north_ug": slope[1] / P.UG,
-                         "slope_up_ug": slope[2] / P.UG})
+    for seg, t, v in static_velocities(rec, navs):
+        slope = np.polyfit(t - t[0], v, 1)[0]
+        rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.orientation,
+                     "v_east_mps": v[-1, 0], "v_north_mps": v[-1, 1], "v_up_mps": v[-1, 2],
+                     "slope_east_ug": slope[0] / P.UG, "slope_north_ug": slope[1] / P.UG,
+                     "slope_up_ug": slope[2] / P.UG})
     return pd.DataFrame(rows)
 
 

@@ -186,6 +186,16 @@ class GroupNavigation:
         return quat_to_dcm_np(self.quaternion[k])
 
 
+def static_velocities(rec: Recording, navs: list[GroupNavigation]):
+    """``(segment, time, velocity)`` of every static segment of the navigated groups, in schedule order."""
+    for nav in navs:
+        for seg in rec.group_segments(nav.group):
+            if seg.is_static:
+                sl = rec.segment_samples(seg)
+                local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
+                yield seg, nav.time[local], nav.velocity[local]
+
+
 def navigation_constants(rec: Recording) -> tuple[np.ndarray, np.ndarray]:
     """``(earth_rate_dt, gravity_dt)`` in ENU for one sample interval."""
     return rec.site.earth_rate * rec.dt, np.array([0.0, 0.0, -rec.site.g]) * rec.dt

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Regenerate everything in results/ (CSV, Markdown, PNG) with one command: bash benchmarks/regenerate_results.sh
+# About 20 minutes on a 2-core machine.  Each step prints its figures; the timing outputs go to results/*.txt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-results}
+mkdir -p "$out"
+casadi-sins demo --out "$out"                                                  # compare, navcheck, budget
+casadi-sins analyze problems/kang2013.toml problems/xie2011-19pos.toml --out "$out"   # predicted sigma
+casadi-sins montecarlo --runs 50 --out "$out"                                  # RMS against predicted sigma
+python benchmarks/bench_nlp.py --seeds 50 --out "$out" | tee "$out/nlp-benchmark.txt"
+python benchmarks/bench_ils.py --seeds 20 --out "$out" | tee "$out/ils-benchmark.txt"
+python benchmarks/sweep_start_attitude.py --seeds 8 --solvers nlp ils --out "$out"
+python benchmarks/bench_budget.py --runs 24 --out "$out"
+python benchmarks/bench_navigation.py | tee "$out/navigation-timing.txt"
+python benchmarks/bench_montecarlo.py --runs 100 | tee "$out/montecarlo-throughput.txt"

@@ -30,7 +30,7 @@ import numpy as np
 from . import frames
 from . import parameters as P
 from .recording import Recording
-from .strapdown import GroupNavigation, alignment_expr, compensated_increments
+from .strapdown import GroupNavigation, alignment_expr, compensated_increments, quat_to_dcm
 
 
 def input_sensitivity(increments: np.ndarray, dt: float, sensor: str) -> np.ndarray:
@@ -70,14 +70,16 @@ def alignment_sensitivity(dtheta: np.ndarray, dv: np.ndarray, dt: float) -> np.n
     return np.stack([phi_cross[2, 1], phi_cross[0, 2], phi_cross[1, 0]])
 
 
+@functools.lru_cache(maxsize=None)
+def _quat_to_dcm_function() -> ca.Function:
+    q = ca.SX.sym("q", 4)
+    return ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm(q))])
+
+
 def quat_to_dcm_batch(q: np.ndarray) -> np.ndarray:
-    """Vectorised twin of :func:`strapdown.quat_to_dcm` for arrays of quaternions (N, 4)."""
-    w, x, y, z = q.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], axis=1)
+    """:func:`strapdown.quat_to_dcm` evaluated for an array of quaternions (N, 4) -> (N, 3, 3)."""
+    flat = np.asarray(_quat_to_dcm_function().map(len(q))(np.asarray(q, dtype=float).T))
+    return flat.T.reshape(len(q), 3, 3).transpose(0, 2, 1)  # vec() is column-major
 
 
 def velocity_sensitivity(rec: Recording, nav: GroupNavigation, params: np.ndarray) -> np.ndarray:

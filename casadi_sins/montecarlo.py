@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Sequence
 
 import numpy as np
@@ -78,7 +78,8 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
 def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.DataFrame:
     if scheduler:
         try:
-            from dask.distributed import Client, LocalCluster, as_completed
+            from dask.distributed import Client, LocalCluster
+            from dask.distributed import as_completed as dask_completed
         except ImportError:
             raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
                                "pip install 'casadi-sins[cluster]'") from None
@@ -86,7 +87,7 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.Data
                                processes=True) if scheduler == "local" else None
         with Client(cluster if cluster is not None else scheduler) as client:
             futures = [client.submit(run_seed, problem, seed, tuple(solvers), pure=False) for seed in seeds]
-            for k, fut in enumerate(as_completed(futures), 1):
+            for k, fut in enumerate(dask_completed(futures), 1):
                 rows += fut.result()
                 if progress:
                     progress(k, len(seeds))
@@ -104,17 +105,11 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.Data
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = [pool.submit(run_seed, problem, seed, tuple(solvers)) for seed in seeds]
-        for k, fut in enumerate(as_completed_futures(futures), 1):
+        for k, fut in enumerate(as_completed(futures), 1):
             rows += fut.result()
             if progress:
                 progress(k, len(seeds))
     return pd.DataFrame(rows)
-
-
-def as_completed_futures(futures):
-    from concurrent.futures import as_completed
-
-    return as_completed(futures)
 
 
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")

@@ -23,7 +23,7 @@ from .problem import Problem, load_problem
 from .recording import Recording, read_recording
 from .report import save_figure, write_frame
 from .simulate import simulate
-from .units import DEG_PER_H, UG
+from .units import DEG_PER_H
 
 #: A parameter is reported weakly observable when its predicted sigma exceeds this many times the
 #: best one of its group (natural units), or these absolute levels.

@@ -48,7 +48,7 @@ def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity
     gyro_input = attitude @ input_sensitivity(w_body[None], 1.0, "gyro")[0]  # d(C d_omega)/dx, (3, 21)
     accel_input = attitude @ input_sensitivity(f_body[None], 1.0, "accel")[0]
     f = np.zeros((N_STATE, N_STATE))
-    phi, dv, pos, par = slice(0, 3), slice(3, 5), slice(5, 7), slice(N_NAV, N_STATE)
+    phi, dv, par = slice(0, 3), slice(3, 5), slice(N_NAV, N_STATE)
     f[phi, phi] = -frames.skew(w_ie)
     f[phi, 5] = omega * np.array([0.0, -sl, cl])  # d(w_ie)/dL
     f[phi, dv] = np.array([[0.0, -1.0 / r_m], [1.0 / r_n, 0.0], [sl / cl / r_n, 0.0]])  # d(w_en)/d(v_E, v_N)

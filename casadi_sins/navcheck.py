@@ -22,7 +22,6 @@ import numpy as np
 import pandas as pd
 
 from . import frames
-from . import parameters as P
 from .problem import GroupPlan, Problem, Timing
 from .recording import Recording
 from .report import save_figure, write_frame

@@ -51,7 +51,7 @@ from . import parameters as P
 from .initial import rough_parameters
 from .recording import Recording
 from .result import CalibrationError, CalibrationResult
-from .strapdown import (PREV_DTHETA, Q, STATE_SIZE, dcm_to_quat, group_alignment, navigation_constants,
+from .strapdown import (Q, dcm_to_quat, group_alignment, navigation_constants,
                         quat_from_rotvec, quat_multiply, step_function)
 from .frames import small_rotation
 from .units import ARCSEC

@@ -23,7 +23,6 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
 
 from . import frames
 from . import parameters as P

@@ -11,7 +11,6 @@ import pytest
 from casadi_sins import parameters as P
 from casadi_sins.cli import main
 from casadi_sins.ils import calibrate_ils
-from casadi_sins.problem import load_problem
 from casadi_sins.recording import write_recording
 from casadi_sins.result import CalibrationError
 from casadi_sins.simulate import simulate

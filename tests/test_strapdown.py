@@ -1,14 +1,13 @@
 """Alignment and static navigation."""
 
 import numpy as np
-import pytest
 
 from casadi_sins import frames
 from casadi_sins import parameters as P
 from casadi_sins.initial import rough_parameters
 from casadi_sins.report import static_velocity_table
 from casadi_sins.strapdown import (dcm_to_quat, group_alignment, navigate, quat_to_dcm_np, step_function)
-from casadi_sins.units import ARCSEC, UG
+from casadi_sins.units import ARCSEC
 
 
 def test_quaternion_dcm_round_trip():

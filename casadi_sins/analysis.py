@@ -18,12 +18,14 @@ import pandas as pd
 
 from . import parameters as P
 from .initial import rough_parameters
-from .nlp import NoiseModel, build_problem, default_static_block
+from .kalman import NoiseSystem
+from .nlp import build_problem, default_observation_spacing, natural_scale
+from .noise import SensorNoise, plan_noise
 from .problem import Problem, load_problem
 from .recording import Recording, read_recording
 from .report import save_figure, write_frame
 from .simulate import simulate
-from .units import DEG_PER_H
+from .units import DEG_PER_H, UG
 
 #: A parameter is reported weakly observable when its predicted sigma exceeds this many times the
 #: best one of its group (natural units), or these absolute levels.
@@ -37,8 +39,7 @@ class Prediction:
     nominal: P.ParameterSet  # nominal values with the predicted covariance
     sigma_natural: np.ndarray
     weak: list[str]
-    accel_noise_ug: float
-    gyro_noise_deg_h: float
+    noise: SensorNoise
 
     def frame(self) -> pd.DataFrame:
         """Parameter-table layout (``parameter,unit,value,sigma``) plus natural units."""
@@ -49,23 +50,20 @@ class Prediction:
         return frame
 
 
-def predict(rec: Recording, nominal: np.ndarray, accel_noise_ug: float, gyro_noise_deg_h: float,
-            quantized: bool | None = None, name: str | None = None) -> Prediction:
-    """Predicted covariance of the 21 parameters for a recording's schedule and a noise level."""
-    block = default_static_block(rec)
-    built = build_problem(rec, nominal, static_block_s=block)
-    _, jac = built.jacobian(np.zeros(built.n_variables))
-    jac = np.asarray(jac)
-    rate_noise = gyro_noise_deg_h * DEG_PER_H
-    quantized = bool(block > 1.0) if quantized is None else quantized
-    white = 0.0
-    if quantized:  # a pulse of velocity quantisation, uniform: S^2 / 12 per observation
-        white = float(np.mean(nominal[P.ACCEL_SCALE] ** 2) / 12.0) / built.velocity_unit**2
-    model = NoiseModel((accel_noise_ug / 50.0) ** 2, white, (rate_noise / built.gyro_unit) ** 2)
-    jw = model.whitener(built)(jac)
+def predict(rec: Recording, nominal: np.ndarray, noise: SensorNoise, name: str | None = None) -> Prediction:
+    """Predicted covariance of the 21 parameters for a recording's schedule and a sensor noise model.
+
+    The NLP's residual Jacobian at ``nominal``, whitened by the Kalman filter of the noise model
+    (:mod:`kalman`), gives ``(J_w^T J_w)^-1``: the Cramer-Rao bound of that model.
+    """
+    built = build_problem(rec, nominal, default_observation_spacing(rec))
+    z = np.zeros(built.n_variables)
+    _, jac = built.jacobian(z)
+    system = NoiseSystem(built.tracks(np.asarray(built.trajectory(z)), True), rec.site.g, rec.site.earth_rate)
+    jw = system.whiten(np.asarray(jac), noise).columns
     u, s, vt = np.linalg.svd(jw, full_matrices=False)
     cov_z = (vt.T / s**2) @ vt
-    scale = np.where(P.SCALE_MASK, nominal * 1e-6, P.NATURAL_SCALE)
+    scale = natural_scale(nominal)
     covariance = cov_z[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
     sigma_nat = np.sqrt(np.diag(cov_z)[: P.N_PARAMS])
     weak = []
@@ -74,21 +72,25 @@ def predict(rec: Recording, nominal: np.ndarray, accel_noise_ug: float, gyro_noi
         for i in range(sl.start, sl.stop):
             if sigma_nat[i] > WEAK_RATIO * best or sigma_nat[i] > WEAK_LEVEL[unit]:
                 weak.append(P.NAMES[i])
-    return Prediction(name or rec.name, P.ParameterSet(nominal, covariance=covariance), sigma_nat, weak,
-                      accel_noise_ug, gyro_noise_deg_h)
+    return Prediction(name or rec.name, P.ParameterSet(nominal, covariance=covariance), sigma_nat, weak, noise)
 
 
 def predict_problem(problem: Problem) -> Prediction:
     """Predicted accuracy of a problem's schedule at its stated noise (noise-free simulation at truth)."""
     sim = simulate(problem, seed=0, noise=False)
-    dev = problem.deviations
-    return predict(sim.recording, problem.truth.values, dev.accel_noise_ug, dev.gyro_noise_deg_h,
-                   quantized=dev.quantize, name=problem.name)
+    dt = 1.0 / problem.rate_hz
+    truth = problem.truth.values
+    noise = SensorNoise.from_deviations(problem.deviations, dt, truth[P.GYRO_SCALE], truth[P.ACCEL_SCALE])
+    return predict(sim.recording, truth, noise, name=problem.name)
 
 
 def predict_file(path: str | Path, accel_noise_ug: float | None = None,
-                 gyro_noise_deg_h: float | None = None) -> Prediction:
-    """Predicted accuracy for a problem file or a recording (TOML), told apart by their ``format``."""
+                 gyro_noise_deg_h: float | None = None, noise: SensorNoise | None = None) -> Prediction:
+    """Predicted accuracy for a problem file or a recording (TOML), told apart by their ``format``.
+
+    A problem states its noise; for a recording the noise is measured in its raw data (``noise``, a
+    datasheet, overrides); ``accel_noise_ug`` / ``gyro_noise_deg_h`` (white, per sample) override both.
+    """
     path = Path(path)
     with open(path, "rb") as handle:
         fmt = tomllib.load(handle).get("format", "")
@@ -96,10 +98,33 @@ def predict_file(path: str | Path, accel_noise_ug: float | None = None,
         problem = load_problem(path)
         changes = {k: v for k, v in (("accel_noise_ug", accel_noise_ug), ("gyro_noise_deg_h", gyro_noise_deg_h))
                    if v is not None}
+        if changes:  # the stated white noise replaces the problem's densities too
+            changes.setdefault("accel_noise_ug", problem.deviations.accel_noise_ug)
+            changes.setdefault("gyro_noise_deg_h", problem.deviations.gyro_noise_deg_h)
+            changes.update(accel_vrw_ug_rthz=0.0, gyro_arw_deg_rth=0.0)
         return predict_problem(problem.with_changes(**changes) if changes else problem)
     rec = read_recording(path)
-    return predict(rec, rough_parameters(rec).values, accel_noise_ug if accel_noise_ug is not None else 50.0,
-                   gyro_noise_deg_h if gyro_noise_deg_h is not None else 0.01)
+    nominal = rough_parameters(rec).values
+    model = plan_noise(rec, nominal, noise).model
+    if accel_noise_ug is not None:
+        model.accel_vrw = np.full(3, accel_noise_ug * UG * np.sqrt(rec.dt))
+    if gyro_noise_deg_h is not None:
+        model.gyro_arw = np.full(3, gyro_noise_deg_h * DEG_PER_H * np.sqrt(rec.dt))
+    return predict(rec, nominal, model)
+
+
+def describe_noise(noise: SensorNoise) -> str:
+    """The noise model in one line of natural units."""
+    nat = noise.complete().natural()
+    text = (f"ARW {np.mean(nat['gyro_arw_deg_rth']):.3g} deg/sqrt(h), VRW {np.mean(nat['accel_vrw_ug_rthz']):.3g} "
+            "ug/sqrt(Hz)")
+    if np.any(nat["accel_quantization_mm_s"] > 0):
+        text += f", quantization {np.mean(nat['accel_quantization_mm_s']):.3g} mm/s"
+    if nat["gyro_bias_instability_deg_h"] or nat["accel_bias_instability_ug"]:
+        text += (f", bias instability {nat['gyro_bias_instability_deg_h']:.3g} deg/h "
+                 f"({nat['gyro_bias_tau_s']:g} s), {nat['accel_bias_instability_ug']:.3g} ug "
+                 f"({nat['accel_bias_tau_s']:g} s)")
+    return text
 
 
 def comparison_frame(predictions: list[Prediction]) -> pd.DataFrame:
@@ -137,8 +162,7 @@ def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.Dat
     for pred in predictions:
         P.write_table(out_dir / f"{pred.name}-predicted.csv", pred.nominal)
         write_frame(pred.frame(), out_dir / f"{pred.name}-predicted-natural",
-                    f"{pred.name}: predicted 1-sigma at {pred.accel_noise_ug:g} ug and {pred.gyro_noise_deg_h:g} deg/h "
-                    "white noise per sample")
+                    f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}")
     table = comparison_frame(predictions)
     if len(predictions) > 1:
         write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)")

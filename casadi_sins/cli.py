@@ -219,9 +219,8 @@ def cmd_budget(args) -> int:
         pred = predict_problem(problem)
         nominal, covariance = pred.nominal.values, pred.nominal.covariance
         source = f"the predicted covariance of {problem.name}'s schedule"
-    dev = problem.deviations
     budget = error_budget(covariance, nominal, orientation_to_dcm(args.orientation), problem.site.latitude,
-                          problem.site.height, problem.site.g, dev.accel_noise_ug, dev.gyro_noise_deg_h,
+                          problem.site.height, problem.site.g, *_white_per_sample(problem),
                           problem.rate_hz, duration_s=args.hours * 3600.0)
     table = write_budget(budget, args.out, problem.name)
     print(f"parameter uncertainty from {source}")
@@ -257,15 +256,24 @@ def cmd_demo(args) -> int:
     from .frames import orientation_to_dcm
 
     nlp_params = results["nlp"].parameters
-    dev = problem.deviations
     budget = error_budget(nlp_params.covariance, nlp_params.values, orientation_to_dcm("ENU"),
-                          problem.site.latitude, problem.site.height, problem.site.g, dev.accel_noise_ug,
-                          dev.gyro_noise_deg_h, problem.rate_hz)
+                          problem.site.latitude, problem.site.height, problem.site.g,
+                          *_white_per_sample(problem), problem.rate_hz)
     print("error budget of static navigation with the NLP's parameters (1 sigma, m):")
     print(write_budget(budget, out, sim.recording.name).to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     print(f"wrote {out}/{sim.recording.name}-compare.{{csv,md}}, -compare-summary.{{csv,md}}, "
           f"-compare-residuals.png, -navcheck.{{csv,md,png}}, -budget.{{csv,md,png}} and the parameter tables")
     return 0
+
+
+def _white_per_sample(problem) -> tuple[float, float]:
+    """A problem's white accelerometer (ug) and gyro (deg/h) noise per sample, densities included."""
+    from .noise import SensorNoise
+    from .units import DEG_PER_H, UG
+
+    dt = 1.0 / problem.rate_hz
+    noise = SensorNoise.from_deviations(problem.deviations, dt)
+    return float(noise.accel_vrw[0]) / dt**0.5 / UG, float(noise.gyro_arw[0]) / dt**0.5 / DEG_PER_H
 
 
 def _slug(text: str) -> str:

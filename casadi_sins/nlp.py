@@ -1,41 +1,41 @@
 """The CasADi/Ipopt estimator: calibration as one nonlinear least-squares problem.
 
 Decision variables
-    the 21 parameters as deviations from a reference (the starting values) in
-    natural units (ug, ppm of the value, arcsec, deg/h), and per group a
-    small rotation (arcsec, ENU) of the start attitude away from the coarse
-    alignment: the positions' deviations from nominal are nuisance variables,
+    the 21 parameters as deviations from a reference (the starting values) in natural units (ug, ppm
+    of the value, arcsec, deg/h), and per group a small rotation (arcsec, ENU) of the start attitude
+    away from the coarse alignment: the positions' deviations from nominal are nuisance variables,
     the alignment is only the starting guess (physics pitfall 6).
 Graph
-    every group is navigated by the one strapdown step (:func:`strapdown.step_function`)
-    chained with ``mapaccum``; the raw pulses enter through the one
-    compensation expression (:func:`parameters.compensate_expr`).  In static
-    segments the pulses are summed into blocks (default 1 s, 5 s for integer
-    pulses: exact for the output model, and the strapdown step is exact for a
-    body at rest); in rotations into 40 ms steps (the error grows as
-    rate^2 x step^3: below 0.001 natural units at 40 ms, see the benchmarks).
+    every group is navigated by the one strapdown step (:func:`strapdown.step_function`) chained
+    with ``mapaccum``; the raw pulses enter through the one compensation expression
+    (:func:`parameters.compensate_expr`).  Static segments are stepped in blocks of summed pulses
+    (exact for the output model, and the strapdown step is exact for a body at rest; on a swaying
+    base in short steps), rotations in 40 ms steps (the error grows as rate^2 x step^3: below 0.001
+    natural units at 40 ms, see the benchmarks).
 Residuals
-    the navigated velocity at the end of every static block (true velocity
-    zero), as differences between consecutive observations divided by the
-    square root of the samples between them.  White accelerometer noise makes
-    the velocity a random walk; these differences are white and of equal
-    variance (physics pitfall 7).  A difference that spans a rotation carries
-    the velocity change across the rotation; ``use_rotation_steps=False``
-    drops it (as a free velocity offset per static segment would), for units
-    whose lever arms or timing offsets make those steps unmodelled.
-Solve
-    Ipopt, derivatives by algorithmic differentiation, Gauss-Newton Hessian
-    ``J^T J`` (see benchmarks/bench_nlp.py for exact Hessian and L-BFGS).
-Gyro residuals
-    per static segment, the mean compensated gyro rate against the Earth rate
-    seen in the navigated attitude.  The velocity sees gyro errors only through
-    the slow attitude drift; the segment mean measures them directly, with gyro
-    noise that is independent of the accelerometer noise of the velocity.
-    Without them the free start attitudes cost a factor 3 in gyro scale factor.
+    the navigated velocity at observation times in the static segments (every second; true velocity
+    zero), and per static segment the mean compensated gyro rate against the Earth rate seen in the
+    navigated attitude.  The velocity sees gyro errors only through the slow attitude drift; the
+    segment mean measures them directly.  A velocity observation after a rotation carries the
+    velocity step across it; ``use_rotation_steps=False`` leaves a free velocity offset there, for
+    units whose lever arms or timing offsets make those steps unmodelled.
+Solve, in two stages
+    1. Ipopt from the rough values, derivatives by algorithmic differentiation, Gauss-Newton Hessian
+       ``J^T J``, with the residuals weighted for white accelerometer noise alone (velocity
+       differences over the square root of their samples, pitfall 7): quick, and near the answer.
+    2. Generalised least squares under the full noise model (:mod:`kalman`): angle and velocity
+       random walk, the gyro noise shared by the gyro means and the velocity, pulse quantization,
+       bias instability, base sway.  Gauss-Newton steps on the Kalman-whitened residuals and
+       Jacobian, re-linearised, until a step is below 1 % of a sigma; every step is reported.
+Noise
+    measured from the raw pulses of the static segments, independently of the fit
+    (:func:`noise.estimate_sensor_noise`), or given by a datasheet; terms the data cannot determine
+    (coarse pulses hide the white noise) are estimated from the fit's residuals (variance
+    components).  The fit's residuals then check the model (:mod:`diagnostics`); a check that fails
+    inflates the sigma and writes a warning.
 Uncertainty
-    the noise level of each residual kind is a variance component estimated
-    from the fit (residual sum of squares over its degrees of freedom, pitfall
-    8); then ``(J^T W J)^-1`` at the solution.
+    ``(J_w^T J_w)^-1`` of the whitened Jacobian at the solution, times the variance factor when the
+    residuals exceed the noise model.
 """
 
 from __future__ import annotations
@@ -46,78 +46,110 @@ from typing import Callable
 
 import casadi as ca
 import numpy as np
+import scipy.sparse as sp
 
 from . import parameters as P
+from .frames import small_rotation
 from .initial import rough_parameters
+from .kalman import GroupTrack, NoiseSystem
+from .noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, NoisePlan, SensorNoise, describe_motion, plan_noise
 from .recording import Recording
 from .result import CalibrationError, CalibrationResult
-from .strapdown import (Q, dcm_to_quat, group_alignment, navigation_constants,
-                        quat_from_rotvec, quat_multiply, step_function)
-from .frames import small_rotation
-from .units import ARCSEC
+from .strapdown import (Q, dcm_to_quat, group_alignment, navigation_constants, quat_from_rotvec, quat_multiply,
+                        quat_to_dcm, step_function)
+from .units import ARCSEC, DEG_PER_H, UG
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
-                 "W from the noise levels estimated in the fit")
+                 "W from the noise model (raw-data estimate, datasheet, fit), times the variance factor when "
+                 "the residuals exceed the model")
+
+#: Rotation step and static step on a swaying base (s).
+ROTATION_STEP_S = 0.04
+SWAY_STATIC_STEP_S = 0.1
+#: Mean square of the whitened residuals after rotations over that of the others, above which the steps
+#: are taken as unmodelled (F-test: the 99.9 % point for 27 against 3500 degrees of freedom is 2.0).
+STEP_CONSISTENCY_LIMIT = 3.0
+RANK_TOLERANCE = 1e-7
+#: Gauss-Newton steps of the generalised least squares stop below this fraction of a sigma.
+GLS_TOLERANCE = 0.01
+GLS_MAX_STEPS = 6
 
 
 @dataclasses.dataclass
 class GroupSteps:
-    """How one group is stepped: pulse sums per step and which step ends are observed."""
+    """How one group is stepped and observed."""
 
     group: int
+    start_time: float  # start of the group's first sample interval, s
     pulses_gyro: np.ndarray  # (3, M) pulse sums per step
     pulses_accel: np.ndarray
     step_dt: np.ndarray  # (M,) step length, s
     previous_scale: np.ndarray  # (M,) 1 where the previous step has the same length, else 0
+    step_segment: np.ndarray  # (M,) static segment number of each step, -1 outside static segments
     observed: np.ndarray  # (K,) indices of steps whose end velocity is observed
     samples_between: np.ndarray  # (K,) samples between consecutive observations (first: since the start)
-    after_rotation: np.ndarray  # (K,) True where the difference spans a rotation
+    after_rotation: np.ndarray  # (K,) True for the first observation after a rotation
     observed_time: np.ndarray  # (K,) time of each observation, s
     segment_of: np.ndarray  # (K,) segment number of each observation
 
+    @property
+    def segment_start(self) -> np.ndarray:
+        """(M,) True at the first step of each static segment."""
+        seg = self.step_segment
+        return (seg >= 0) & (seg != np.concatenate([[-1], seg[:-1]]))
 
-def plan_steps(rec: Recording, group: int, static_block_s: float = 1.0, rotation_step_s: float = 0.0
-               ) -> GroupSteps:
-    """Split a group's samples into navigation steps (blocks in static segments and rotations)."""
+
+def plan_steps(rec: Recording, group: int, observe_s: float = 1.0, rotation_step_s: float = 0.0,
+               static_step_s: float | None = None) -> GroupSteps:
+    """Split a group's samples into navigation steps and choose the observed ones.
+
+    Static segments are stepped in ``static_step_s`` blocks (default ``observe_s``) and observed every
+    ``observe_s`` and at their end; rotations in ``rotation_step_s`` steps (0: every sample).
+    """
+    static_step_s = observe_s if static_step_s is None else static_step_s
     span = rec.group_samples(group)
-    block = max(1, int(round(static_block_s * rec.rate_hz)))
+    block = max(1, int(round(static_step_s * rec.rate_hz)))
+    every = max(1, int(round(observe_s / static_step_s)))
     rotation_block = max(1, int(round(rotation_step_s * rec.rate_hz)))
-    bounds: list[tuple[int, int, int | None]] = []  # (first sample, stop, static segment number or None)
+    bounds: list[tuple[int, int, int, bool]] = []  # (first sample, stop, static segment number or -1, observed)
     cursor = span.start
     for seg in rec.group_segments(group):
         sl = rec.segment_samples(seg)
         while cursor < sl.start:  # samples between segments: one step each
-            bounds.append((cursor, cursor + 1, None))
+            bounds.append((cursor, cursor + 1, -1, False))
             cursor += 1
         size = block if seg.is_static else rotation_block
         n = sl.stop - sl.start
         count = max(1, int(round(n / size)))
         edges = np.round(np.linspace(sl.start, sl.stop, count + 1)).astype(int)
-        for a, b in zip(edges[:-1], edges[1:]):
-            bounds.append((a, b, seg.number if seg.is_static else None))
+        for k, (a, b) in enumerate(zip(edges[:-1], edges[1:])):
+            observed = seg.is_static and ((k + 1) % every == 0 or k == count - 1)
+            bounds.append((a, b, seg.number if seg.is_static else -1, observed))
         cursor = sl.stop
     while cursor < span.stop:
-        bounds.append((cursor, cursor + 1, None))
+        bounds.append((cursor, cursor + 1, -1, False))
         cursor += 1
     cum_g = np.vstack([np.zeros(3), np.cumsum(rec.gyro, axis=0)])
     cum_a = np.vstack([np.zeros(3), np.cumsum(rec.accel, axis=0)])
     first = np.array([b[0] for b in bounds])
     stop = np.array([b[1] for b in bounds])
-    static_of = np.array([-1 if b[2] is None else b[2] for b in bounds])
+    static_of = np.array([b[2] for b in bounds])
     lengths = (stop - first).astype(float)
-    observed = np.flatnonzero(static_of >= 0)
+    observed = np.flatnonzero([b[3] for b in bounds])
     obs_stop = stop[observed]
     between = np.diff(np.concatenate([[span.start], obs_stop]))
     seg_numbers = static_of[observed]
     spans_rotation = np.concatenate([[False], seg_numbers[1:] != seg_numbers[:-1]])
     return GroupSteps(
         group=group,
+        start_time=float(rec.time[span.start] - rec.dt),
         pulses_gyro=(cum_g[stop] - cum_g[first]).T,
         pulses_accel=(cum_a[stop] - cum_a[first]).T,
         step_dt=lengths * rec.dt,
         # coning and sculling use the previous increment as a rate estimate: meaningless across a change of
         # step length (a 1 s block after a rotation sample would extrapolate the rotation into rest)
         previous_scale=(lengths == np.concatenate([[lengths[0]], lengths[:-1]])).astype(float),
+        step_segment=static_of,
         observed=observed,
         samples_between=between.astype(float),
         after_rotation=spans_rotation,
@@ -126,88 +158,100 @@ def plan_steps(rec: Recording, group: int, static_block_s: float = 1.0, rotation
     )
 
 
+def natural_scale(reference: np.ndarray) -> np.ndarray:
+    """``d(parameters)/d(natural-unit variables)``: ppm of the value for scale factors, else the natural unit."""
+    return np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)
+
+
 def natural_to_parameters(z, reference: np.ndarray):
     """Parameters (SI) from natural-unit deviations ``z`` from ``reference`` (CasADi or NumPy)."""
-    ref = ca.DM(reference)
-    scale = np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)
-    return ref + ca.diag(ca.DM(scale)) @ z if isinstance(z, (ca.MX, ca.SX)) else reference + scale * np.asarray(z)
-
-
-RESIDUAL_KINDS = ("velocity", "gyro")
-#: Floors of the estimated noise (far below any real sensor): gyro angle random walk (deg/sqrt(h)) and
-#: accelerometer velocity random walk (ug/sqrt(Hz)).  They keep noise-free data from giving one kind of
-#: residual an absurd weight.
-GYRO_ARW_FLOOR = 1e-6
-#: Mean square of the whitened residuals that span rotations over that of the others, above which the
-#: steps are taken as unmodelled (F-test: the 99.9 % point for 27 against 3500 degrees of freedom is 2.0).
-STEP_CONSISTENCY_LIMIT = 3.0
-RANK_TOLERANCE = 1e-7
-ACCEL_VRW_FLOOR = 0.01
+    scale = natural_scale(reference)
+    if isinstance(z, (ca.MX, ca.SX)):
+        return ca.DM(reference) + ca.diag(ca.DM(scale)) @ z
+    return reference + scale * np.asarray(z)
 
 
 @dataclasses.dataclass
 class Problem:
-    """The built NLP: CasADi functions of the decision vector, and what they mean.
+    """The built NLP: CasADi functions of the decision vector, and what each residual row is.
 
-    Residuals come in two kinds with independent noise: velocity differences (accelerometer
-    noise, unit ``velocity_unit`` m/s per square-root sample) and static gyro means (gyro noise,
-    unit ``gyro_unit`` rad/s per square-root sample).  Their relative weights are variance
-    components estimated from the fit.
+    Residual rows, in time order per group: three per velocity observation (m/s, ENU) and three per
+    static segment's mean gyro rate (rad/s, body), the latter after the segment's last velocity.
     """
 
-    residuals: ca.Function  # w -> r (in the nominal units of each kind)
+    residuals: ca.Function  # w -> r
     jacobian: ca.Function  # w -> (r, J)
+    trajectory: ca.Function  # w -> quaternions at every step end, all groups side by side (4, sum M)
     n_variables: int
     n_residuals: int
-    kind: np.ndarray  # (m,) 0 velocity, 1 gyro
+    kind: np.ndarray  # (m,) 0 velocity, 1 gyro mean
+    row_group: np.ndarray  # (m,) group of each row
+    row_segment: np.ndarray  # (m,) static segment number of each row
+    row_after_rotation: np.ndarray  # (m,) velocity rows of the first observation after a rotation
+    row_samples: np.ndarray  # (m,) samples since the previous velocity observation (0 for gyro rows)
+    row_first: np.ndarray  # (m,) the group's first velocity observation (known zero velocity before it)
+    events: list[dict[int, list[tuple]]]  # per group: step -> observations (see kalman.GroupTrack)
     groups: list[GroupSteps]
     reference: np.ndarray
     start_attitudes: dict[int, np.ndarray]
-    velocity_unit: float
-    gyro_unit: float
     build_time: float
-    residual_index: list[tuple]
-    chains: list[np.ndarray]  # residual indices of each run of consecutive velocity differences (group, axis)
-    samples: np.ndarray  # (m,) samples spanned by each velocity difference (0 for gyro residuals)
-    from_start: np.ndarray  # (m,) True for a group's first difference (velocity known zero at the start)
+    residual_index: list[tuple]  # (group, kind label, observation/segment, axis) per row
+
+    def tracks(self, trajectory: np.ndarray, use_rotation_steps: bool, motions=None) -> list[GroupTrack]:
+        """The noise model's view of the groups, along the navigated attitude ``trajectory``."""
+        sway = {m.segment: m.gyro_mean_variance for m in (motions or [])}
+        tracks, offset = [], 0
+        for plan, events in zip(self.groups, self.events):
+            m = len(plan.step_dt)
+            quats = trajectory[:, offset:offset + m]
+            offset += m
+            after = np.asarray(_quat_to_dcm_batch(quats))
+            before = np.concatenate([self.start_attitudes_dcm(plan.group)[None], after[:-1]])
+            attitude = 0.5 * (before + after)
+            seg_start = plan.segment_start
+            free = np.zeros(m, bool)
+            if not use_rotation_steps:
+                first_static = np.flatnonzero(seg_start)[:1]
+                free = seg_start.copy()
+                free[first_static] = False
+            durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum())
+                         for s in np.unique(plan.step_segment[plan.step_segment >= 0])}
+            tracks.append(GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0,
+                                     free, events, durations,
+                                     {s: sway[s] for s in durations if s in sway}))
+        return tracks
+
+    def start_attitudes_dcm(self, group: int) -> np.ndarray:
+        return self.start_attitudes[group]
 
 
-def static_gyro_noise(rec: Recording, params: np.ndarray, block: int = 100) -> float:
-    """A first estimate of the gyro white noise per sample (rad/s), from block means in static segments.
-
-    Over-estimates with integer pulses (quantisation adds to short blocks); the fit refines it.
-    """
-    from .strapdown import compensated_increments
-
-    variances = []
-    for seg in rec.static_segments:
-        dtheta, _ = compensated_increments(rec, params, rec.segment_samples(seg))
-        n = len(dtheta) // block
-        if n < 3:
-            continue
-        means = dtheta[: n * block].reshape(n, block, 3).mean(axis=1) / rec.dt
-        variances.append(means.var(axis=0, ddof=1).mean() * block)
-    floor = GYRO_ARW_FLOOR * np.pi / 180 / 60 / np.sqrt(rec.dt)  # ARW (rad/sqrt(s)) -> per-sample rate noise
-    return max(float(np.sqrt(np.mean(variances))) if variances else floor, floor)
+_QUAT_TO_DCM = None
 
 
-def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float = 1.0, rotation_step_s: float = 0.04,
-                  use_rotation_steps: bool = True, noise_ug: float = 50.0) -> Problem:
+def _quat_to_dcm_batch(quats: np.ndarray) -> np.ndarray:
+    """(4, M) quaternions -> (M, 3, 3) DCMs, by the one CasADi expression mapped over columns."""
+    global _QUAT_TO_DCM
+    if _QUAT_TO_DCM is None:
+        q = ca.SX.sym("q", 4)
+        _QUAT_TO_DCM = ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm(q))])
+    flat = np.asarray(_QUAT_TO_DCM.map(quats.shape[1])(quats))
+    return flat.T.reshape(-1, 3, 3).transpose(0, 2, 1)  # vec() is column-major
+
+
+def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
+                  rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None) -> Problem:
     """Build the symbolic NLP for a recording around ``reference`` parameters."""
-    from .strapdown import quat_to_dcm
-
     t0 = time.perf_counter()
     groups = rec.group_ids
     n_var = P.N_PARAMS + 3 * len(groups)
     w = ca.MX.sym("w", n_var)
     params = natural_to_parameters(w[: P.N_PARAMS], reference)
     earth_dt, gravity_dt = navigation_constants(rec)
-    velocity_unit = noise_ug * P.UG * rec.dt  # velocity noise per sample at the nominal accelerometer noise
-    gyro_unit = static_gyro_noise(rec, reference)
-    parts, kinds, index, chains, spans, starts_flag = [], [], [], [], [], []
-    plans, starts = [], {}
+    parts, trajectories = [], []
+    kind, row_group, row_segment, after, samples, first, index = [], [], [], [], [], [], []
+    plans, starts, all_events = [], {}, []
     for gi, group in enumerate(groups):
-        plan = plan_steps(rec, group, static_block_s, rotation_step_s)
+        plan = plan_steps(rec, group, observe_s, rotation_step_s, static_step_s)
         plans.append(plan)
         start = group_alignment(rec, group, reference)
         starts[group] = start
@@ -221,64 +265,112 @@ def build_problem(rec: Recording, reference: np.ndarray, static_block_s: float =
         ratio = plan.step_dt[None, :] / rec.dt
         states = chain(x0, dtheta, dv, ca.DM(earth_dt[:, None] * ratio), ca.DM(gravity_dt[:, None] * ratio),
                        ca.DM(plan.previous_scale).T)
-        # velocity differences between consecutive observations, whitened for a random walk
-        velocity = states[4:7, list(plan.observed)]
-        diffs = ca.horzcat(velocity[:, 0], velocity[:, 1:] - velocity[:, :-1])
-        keep = np.ones(len(plan.observed), bool) if use_rotation_steps else ~plan.after_rotation
-        weights = 1.0 / (np.sqrt(plan.samples_between) * velocity_unit)
-        cols = list(np.flatnonzero(keep))
-        parts.append(ca.vec(diffs[:, cols] @ ca.diag(ca.DM(weights[cols]))))
-        base = len(kinds)
-        kinds += [0] * (3 * len(cols))
-        index += [(group, "rotation step" if plan.after_rotation[k] else "velocity", int(k), axis)
-                  for k in cols for axis in range(3)]
-        spans += [plan.samples_between[k] for k in cols for _ in range(3)]
-        starts_flag += [k == 0 for k in cols for _ in range(3)]
-        # consecutive differences share the white (quantisation) noise of the velocity between them
-        runs = np.split(np.arange(len(cols)), np.flatnonzero(np.diff(cols) != 1) + 1)
-        chains += [base + 3 * run + axis for run in runs for axis in range(3)]
-        # mean gyro rate of each static segment against the Earth rate seen in the navigated attitude
-        for seg_number in np.unique(plan.segment_of):
-            cols_seg = plan.observed[plan.segment_of == seg_number]
-            duration = float(plan.step_dt[cols_seg].sum())
-            n_samples = duration / rec.dt
-            mean_rate = ca.sum2(dtheta[:, list(cols_seg)]) / duration
-            mid = int(cols_seg[len(cols_seg) // 2])
-            earth_in_body = quat_to_dcm(states[Q, mid]).T @ ca.DM(rec.site.earth_rate)
-            parts.append((mean_rate - earth_in_body) * (np.sqrt(n_samples) / gyro_unit))
-            kinds += [1] * 3
-            index += [(group, "gyro", int(seg_number), axis) for axis in range(3)]
-            spans += [0.0] * 3
-            starts_flag += [False] * 3
+        trajectories.append(states[Q, :])
+        events: dict[int, list[tuple]] = {}
+        row = sum(p.shape[0] for p in parts)
+        last_obs_of = {int(s): int(plan.observed[plan.segment_of == s][-1]) for s in np.unique(plan.segment_of)}
+        pieces = []
+        for k, step in enumerate(plan.observed):
+            pieces.append(states[4:7, int(step)])
+            events.setdefault(int(step), []).append(("v", row))
+            kind += [0] * 3
+            row_group += [group] * 3
+            row_segment += [int(plan.segment_of[k])] * 3
+            after += [bool(plan.after_rotation[k])] * 3
+            samples += [float(plan.samples_between[k])] * 3
+            first += [k == 0] * 3
+            label = "rotation step" if plan.after_rotation[k] else "velocity"
+            index += [(group, label, k, axis) for axis in range(3)]
+            row += 3
+            seg_number = int(plan.segment_of[k])
+            if step == last_obs_of[seg_number]:
+                # mean gyro rate of the static segment against the Earth rate seen in the navigated attitude
+                in_seg = plan.step_segment == seg_number
+                cols = list(np.flatnonzero(in_seg))
+                duration = float(plan.step_dt[in_seg].sum())
+                mean_rate = ca.sum2(dtheta[:, cols]) / duration
+                mid = int(cols[len(cols) // 2])
+                earth_in_body = quat_to_dcm(states[Q, mid]).T @ ca.DM(rec.site.earth_rate)
+                pieces.append(mean_rate - earth_in_body)
+                events[int(step)].append(("g", row, seg_number))
+                kind += [1] * 3
+                row_group += [group] * 3
+                row_segment += [seg_number] * 3
+                after += [False] * 3
+                samples += [0.0] * 3
+                first += [False] * 3
+                index += [(group, "gyro", seg_number, axis) for axis in range(3)]
+                row += 3
+        parts.append(ca.vertcat(*pieces))
+        all_events.append(events)
     r = ca.vertcat(*parts)
     residuals = ca.Function("residuals", [w], [r])
     jacobian = ca.Function("residuals_jacobian", [w], [r, ca.jacobian(r, w)])
-    return Problem(residuals, jacobian, n_var, r.shape[0], np.array(kinds), plans, reference, starts,
-                   velocity_unit, gyro_unit, time.perf_counter() - t0, index, chains, np.array(spans),
-                   np.array(starts_flag))
+    trajectory = ca.Function("trajectory", [w], [ca.horzcat(*trajectories)])
+    return Problem(residuals, jacobian, trajectory, n_var, r.shape[0], np.array(kind), np.array(row_group),
+                   np.array(row_segment), np.array(after), np.array(samples), np.array(first), all_events,
+                   plans, reference, starts, time.perf_counter() - t0, index)
 
 
-def _solve_ipopt(problem: Problem, hessian: str, tolerance: float, max_iterations: int,
-                 progress: Callable[[str], None] | None, kind_weights: np.ndarray):
+def quick_weights(problem: Problem, noise: SensorNoise, dt: float, use_rotation_steps: bool,
+                  motions=()) -> sp.csr_matrix:
+    """The quick weighting of stage 1: white accelerometer noise alone.
+
+    Consecutive velocity observations of a group are differenced and divided by the random walk over
+    the samples between them (pitfall 7); a difference across a rotation is dropped when the steps are
+    not used.  Gyro means are divided by the white gyro noise of a segment and its sway.
+    """
+    sway = {m.segment: m.gyro_mean_variance for m in motions}
+    model = noise.complete()
+    vrw = max(float(np.mean(model.accel_vrw)), ACCEL_VRW_FLOOR)
+    arw = max(float(np.mean(model.gyro_arw)), GYRO_ARW_FLOOR)
+    rows, cols, vals = [], [], []
+    out = 0
+    velocity_rows = np.flatnonzero(problem.kind == 0)
+    previous = {}
+    for i in velocity_rows[::3]:
+        group = problem.row_group[i]
+        keep = use_rotation_steps or not problem.row_after_rotation[i]
+        weight = 1.0 / (vrw * np.sqrt(problem.row_samples[i] * dt))
+        if keep:
+            for axis in range(3):
+                rows.append(out + axis), cols.append(i + axis), vals.append(weight)
+                if group in previous:
+                    rows.append(out + axis), cols.append(previous[group] + axis), vals.append(-weight)
+            out += 3
+        previous[group] = i
+    for i in np.flatnonzero(problem.kind == 1)[::3]:
+        seg = problem.row_segment[i]
+        plan = next(p for p in problem.groups if p.group == problem.row_group[i])
+        duration = float(plan.step_dt[plan.step_segment == seg].sum())
+        variance = arw**2 / duration + sway.get(seg, np.zeros(3))
+        for axis in range(3):
+            rows.append(out + axis), cols.append(i + axis), vals.append(1.0 / np.sqrt(variance[axis]))
+        out += 3
+    return sp.csr_matrix((vals, (rows, cols)), shape=(out, problem.n_residuals))
+
+
+def _solve_ipopt(problem: Problem, weights: sp.csr_matrix, hessian: str, tolerance: float, max_iterations: int,
+                 progress: Callable[[str], None] | None):
     w = ca.MX.sym("w", problem.n_variables)
-    r = problem.residuals(w) * ca.DM(kind_weights[problem.kind])
-    weight = 1.0 / problem.n_residuals  # mean square: the tolerance does not depend on the recording's length
-    nlp = {"x": w, "f": 0.5 * weight * ca.dot(r, r)}
+    d = ca.DM(weights.tocsc())
+    r = ca.mtimes(d, problem.residuals(w))  # not the jacobian function's r: its derivative would hold J's
+    scale = 1.0 / weights.shape[0]  # mean square: the tolerance does not depend on the recording's length
+    nlp = {"x": w, "f": 0.5 * scale * ca.dot(r, r)}
     # The variables are in natural units already: Ipopt's gradient scaling at the (far-off) rough start
     # would shrink the objective by ~1e-6 and stall the line search at round-off.  The gradient of the
     # chained navigation has a round-off floor near 1e-8; a gradient of 1e-7 moves the estimate by
-    # ~1e-4 of its sigma.
-    # Also stop when the objective stalls: with noise-free data or very unequal weights the gradient's
-    # round-off floor can exceed any fixed tolerance although Gauss-Newton has converged.
+    # ~1e-4 of its sigma.  Also stop when the objective stalls: with noise-free data or very unequal
+    # weights the gradient's round-off floor can exceed any fixed tolerance although Gauss-Newton has
+    # converged.
     opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
             "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": 1e-12, "ipopt.acceptable_iter": 2,
             "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"}
     if hessian == "gauss-newton":
-        _, jac = problem.jacobian(w)
-        jac = ca.diag(ca.DM(kind_weights[problem.kind])) @ jac
+        jw = ca.mtimes(d, problem.jacobian(w)[1])
         sigma = ca.MX.sym("sigma")
         opts["hess_lag"] = ca.Function("nlp_hess_l", [w, ca.MX.sym("p", 0, 1), sigma, ca.MX.sym("lam_g", 0, 1)],
-                                       [sigma * weight * ca.triu(jac.T @ jac)], ["x", "p", "lam_f", "lam_g"],
+                                       [sigma * scale * ca.triu(jw.T @ jw)], ["x", "p", "lam_f", "lam_g"],
                                        ["triu_hess_gamma_x_x"])
     elif hessian == "limited-memory":
         opts["ipopt.hessian_approximation"] = "limited-memory"
@@ -293,101 +385,25 @@ def _solve_ipopt(problem: Problem, hessian: str, tolerance: float, max_iteration
     return np.asarray(sol["x"]).ravel(), stats
 
 
-@dataclasses.dataclass
-class NoiseModel:
-    """Noise of the residuals, in their nominal units.
+def default_observation_spacing(rec: Recording) -> float:
+    """Seconds between static velocity observations: 1 s, or 5 s for integer pulse counters.
 
-    Velocity: a random walk of variance ``random_walk`` per sample (white accelerometer noise) plus
-    white noise of variance ``white`` on every observed velocity (integer pulse counters, pitfall 8);
-    consecutive differences then share the white part (covariance ``-white``).  Gyro residuals:
-    variance ``gyro`` per sample.
-    """
-
-    random_walk: float = 1.0
-    white: float = 0.0
-    gyro: float = 1.0
-
-    def whitener(self, problem: Problem) -> Callable[[np.ndarray], np.ndarray]:
-        """A function applying ``Sigma^-1/2`` to residual vectors or Jacobians (rows = residuals)."""
-        n = problem.samples
-        factors = []
-        for chain in problem.chains:
-            # residual r_i = d_i / sqrt(n_i): Var = rw + white (2 or 1) / n_i, Cov(i, i+1) = -white / sqrt(n_i n_j)
-            ni = n[chain]
-            diag = self.random_walk + self.white * np.where(problem.from_start[chain], 1.0, 2.0) / ni
-            cov = np.diag(diag)
-            if len(chain) > 1 and self.white > 0:
-                off = -self.white / np.sqrt(ni[:-1] * ni[1:])
-                cov += np.diag(off, 1) + np.diag(off, -1)
-            factors.append((chain, np.linalg.cholesky(cov)))
-        gyro = problem.kind == 1
-        gyro_scale = 1.0 / np.sqrt(self.gyro)
-
-        def apply(x: np.ndarray) -> np.ndarray:
-            out = np.array(x, dtype=float, copy=True)
-            for chain, chol in factors:
-                out[chain] = np.linalg.solve(chol, x[chain])
-            out[gyro] = x[gyro] * gyro_scale
-            return out
-
-        return apply
-
-
-def estimate_noise(r: np.ndarray, jac: np.ndarray, problem: Problem, floors: NoiseModel, rounds: int = 6
-                   ) -> tuple[np.ndarray, NoiseModel]:
-    """Estimate the noise model from the fit and move to its generalised least-squares optimum.
-
-    Velocity: random-walk and white variances from the lag-0 and lag-1 moments of consecutive
-    residuals; gyro: residual sum of squares over its degrees of freedom (count less its share of
-    the hat matrix).  Each round takes a Gauss-Newton step with the current model from the solution
-    (the model is linear there).  Returns the step in the variables and the model.
-    """
-    model = NoiseModel()
-    step = np.zeros(jac.shape[1])
-    gyro = problem.kind == 1
-    for _ in range(rounds):
-        whiten = model.whitener(problem)
-        jw, rw = whiten(jac), whiten(r)
-        u, s, vt = np.linalg.svd(jw, full_matrices=False)
-        step = -vt.T @ ((u.T @ rw) / s)
-        res = r + jac @ step
-        # lag 0: E[r_i^2] = rw + white * (2 or 1) / n_i;  lag 1: E[r_i r_j] = -white / sqrt(n_i n_j)
-        lag0 = np.concatenate([res[c] ** 2 for c in problem.chains])
-        inv_n = np.concatenate([np.where(problem.from_start[c], 1.0, 2.0) / problem.samples[c]
-                                for c in problem.chains])
-        lag1 = np.concatenate([res[c][:-1] * res[c][1:] * np.sqrt(problem.samples[c][:-1] * problem.samples[c][1:])
-                               for c in problem.chains])
-        white = max(-float(np.mean(lag1)), 0.0) if lag1.size else 0.0
-        random_walk = max(float(np.mean(lag0) - white * np.mean(inv_n)), floors.random_walk)
-        leverage = np.sum(u**2, axis=1)
-        dof = gyro.sum() - leverage[gyro].sum()
-        gyro_var = (max(float(np.sum((res[gyro] / np.sqrt(model.gyro)) ** 2) / dof) * model.gyro, floors.gyro)
-                    if gyro.any() and dof > 0.5 else model.gyro)
-        new = NoiseModel(random_walk, max(white, floors.white), gyro_var)
-        if np.allclose([new.random_walk, new.white, new.gyro], [model.random_walk, model.white, model.gyro],
-                       rtol=1e-3, atol=1e-12):
-            model = new
-            break
-        model = new
-    return step, model
-
-
-def default_static_block(rec: Recording) -> float:
-    """Seconds per static observation: 1 s, or 5 s for integer pulse counters.
-
-    Integer pulses add a white velocity noise of about one pulse to every observation (pitfall 8),
-    far from white when the pulse is much larger than the sensor noise; over 5 s blocks the random
+    Integer pulses add a white velocity noise of about one pulse to every observation (pitfall 8), far
+    from white when the pulse is much larger than the sensor noise (a sawtooth); over 5 s the random
     walk of the accelerometer noise dominates it again, and a static base loses nothing by it.
     """
     integral = np.all(rec.accel == np.round(rec.accel)) and np.all(rec.gyro == np.round(rec.gyro))
     return 5.0 if integral else 1.0
 
 
+default_static_block = default_observation_spacing  # the name used before observation and step were separate
+
+
 def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian: str = "gauss-newton",
-                  static_block_s: float | None = None, rotation_step_s: float = 0.04,
-                  use_rotation_steps: bool | str = "auto",
-                  tolerance: float = 1e-7, max_iterations: int = 100,
-                  progress: Callable[[str], None] | None = None) -> CalibrationResult:
+                  static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
+                  use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int = 100,
+                  progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
+                  static_step_s: float | None = None) -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
 
     Parameters
@@ -396,90 +412,273 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     initial : ParameterSet, optional
         Starting values and reference of the natural-unit variables; default the rough values.
     hessian : {"gauss-newton", "exact", "limited-memory"}
-    static_block_s, rotation_step_s : float
-        Step lengths: static blocks (default :func:`default_static_block`) and rotation steps (40 ms:
-        a method error below 0.001 natural units on the paper's problem, see benchmarks/bench_nlp.py;
-        the number of steps, hence the time, does not grow with the sample rate).
+        Hessian of Ipopt's stage.
+    static_block_s : float, optional
+        Seconds between velocity observations in static segments (default
+        :func:`default_observation_spacing`).
+    rotation_step_s : float
+        Rotation step (40 ms: a method error below 0.001 natural units on the paper's problem, see
+        benchmarks/bench_nlp.py; the number of steps, hence the time, does not grow with the sample rate).
     use_rotation_steps : bool or "auto"
-        Keep the velocity differences that span rotations.  ``"auto"`` keeps them unless they
-        disagree with the static residuals (F-test, :data:`STEP_CONSISTENCY_LIMIT`): lever arms or
-        timing offsets of a real unit make velocity steps that the 21 parameters cannot explain.
+        Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
+        static residuals (F-test, :data:`STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets of a
+        real unit make velocity steps that the 21 parameters cannot explain.
     tolerance : float
-        Ipopt's tolerance on the gradient of the mean square whitened residual (natural units).
+        Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
+    noise : SensorNoise, optional
+        Datasheet noise terms; those not given are estimated from the data.
+    static_step_s : float, optional
+        Navigation step in static segments (default: the observation spacing; on a swaying base
+        :data:`SWAY_STATIC_STEP_S`).
 
     Raises
     ------
     CalibrationError
         Ipopt fails to converge or the problem is rank deficient.
     """
+    from .diagnostics import assess
+
     t_start = time.perf_counter()
-    if static_block_s is None:
-        static_block_s = default_static_block(rec)
-    if use_rotation_steps == "auto":
-        result = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_step_s, True, tolerance,
-                               max_iterations, progress)
-        ratio = result.info["rotation_step_ratio"]
-        if ratio <= STEP_CONSISTENCY_LIMIT:
-            return result
-        message = (f"the velocity steps across rotations are {np.sqrt(ratio):.3g} times noisier than the static "
-                   "residuals: not explained by the 21-parameter model (lever arms, timing offset?); "
-                   "refitted without them")
-        if progress:
-            progress(f"nlp: {message}")
-        refit = calibrate_nlp(rec, initial, hessian, static_block_s, rotation_step_s, False, tolerance,
-                              max_iterations, progress)
-        refit.info["warnings"] = refit.info.get("warnings", []) + [message]
-        refit.wall_time = time.perf_counter() - t_start
-        return refit
+    observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
     reference = initial.values.copy()
-    problem = build_problem(rec, reference, static_block_s, rotation_step_s, use_rotation_steps)
+    noise_plan = plan_noise(rec, reference, noise)
+    swaying = describe_motion(noise_plan.motions)
+    if static_step_s is None:
+        static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
+    problem = build_problem(rec, reference, observe_s, rotation_step_s, static_step_s)
     if progress:
         progress(f"nlp: graph of {sum(len(p.step_dt) for p in problem.groups)} steps, {problem.n_variables} "
                  f"variables, {problem.n_residuals} residuals built in {problem.build_time:.2f} s")
-    z, stats = _solve_ipopt(problem, hessian, tolerance, max_iterations, progress, np.ones(len(RESIDUAL_KINDS)))
-    if not stats["success"]:
-        _check_rank(np.asarray(problem.jacobian(z)[1]))  # a rank deficiency is the likelier cause: name it
-        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} "
-                               f"after {stats['iter_count']} iterations")
-    r, jac = (np.asarray(m) for m in problem.jacobian(z))
-    _check_rank(jac)
-    floors = NoiseModel((ACCEL_VRW_FLOOR * P.UG * np.sqrt(rec.dt) / problem.velocity_unit) ** 2, 0.0,
-                        (GYRO_ARW_FLOOR * np.pi / 180 / 60 / np.sqrt(rec.dt) / problem.gyro_unit) ** 2)
-    step, noise = estimate_noise(r.ravel(), jac, problem, floors)
-    # the reweighting step is a fraction of a sigma, where the model is linear: update r, keep J
-    z = z + step
-    r = r.ravel() + jac @ step
-    whiten = noise.whitener(problem)
-    rw = whiten(r)
-    covariance_w, rms = _covariance(whiten(jac), rw)
+        if swaying:
+            progress(f"nlp: {swaying}; static segments stepped at {static_step_s:g} s")
+    modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
+    warnings = []
+    for mode in modes:
+        fit = _fit(rec, problem, noise_plan, mode, hessian, tolerance, max_iterations, progress)
+        if mode and len(modes) > 1 and fit["rotation_step_ratio"] > STEP_CONSISTENCY_LIMIT:
+            message = (f"the velocity steps across rotations are {np.sqrt(fit['rotation_step_ratio']):.3g} times "
+                       "noisier than the static residuals: not explained by the 21-parameter model (lever arms, "
+                       "timing offset?); refitted without them")
+            if progress:
+                progress(f"nlp: {message}")
+            warnings.append(message)
+            continue
+        break
+    if swaying:
+        warnings.append(f"{swaying}: the static gyro means carry the sway's variance, the navigation steps "
+                        f"{static_step_s:g} s")
+    assessment = assess(rec, problem, fit, noise_plan)
+    if assessment.model_fails:
+        # errors outside the model: give them a place in it (unmodelled acceleration per static segment,
+        # unmodelled rate per gyro mean), with variances from the residuals, and solve again
+        model = estimate_unmodelled(problem, fit, noise_plan)
+        if progress:
+            progress(f"nlp: residuals exceed the noise model: unmodelled acceleration "
+                     f"{model.unmodelled_acceleration / UG:.3g} ug per static segment, unmodelled rate "
+                     f"{model.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean added")
+        stats = fit["stats"]
+        fit = _gls(rec, problem, noise_plan, model, fit["z"], fit["use_rotation_steps"], progress, update_free=False)
+        fit["stats"] = stats
+        first_warnings = assessment.warnings
+        assessment = assess(rec, problem, fit, noise_plan)
+        warnings += [f"{w.split(';')[0]}" for w in first_warnings]
+        warnings.append(f"errors outside the model were added to it: {model.unmodelled_acceleration / UG:.3g} ug "
+                        f"unmodelled acceleration per static segment, {model.unmodelled_rate / DEG_PER_H:.3g} "
+                        "deg/h per static gyro mean; sigma includes them")
+    warnings += assessment.warnings
+    covariance_w = fit["covariance_natural"] * assessment.variance_factor
+    z = fit["z"]
     values = natural_to_parameters(z[: P.N_PARAMS], reference)
-    scale = np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)  # d(params)/dz
+    scale = natural_scale(reference)
     covariance = covariance_w[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
     start_offsets = {g: z[P.N_PARAMS + 3 * i: P.N_PARAMS + 3 * i + 3] for i, g in enumerate(rec.group_ids)}
     start_attitudes = {g: small_rotation(start_offsets[g] * ARCSEC) @ problem.start_attitudes[g]
                        for g in rec.group_ids}
-    pulse_white = np.sqrt(noise.white) * problem.velocity_unit  # m/s, white velocity noise per observation
-    noise = {"accel_noise_ug": np.sqrt(noise.random_walk) * problem.velocity_unit / (P.UG * rec.dt),
-             "gyro_noise_deg_h": np.sqrt(noise.gyro) * problem.gyro_unit / (np.pi / 180 / 3600),
-             "velocity_white_mps": pulse_white}
+    model = fit["noise"]
+    per_sample = {"accel_noise_ug": float(np.mean(model.accel_vrw)) / np.sqrt(rec.dt) / UG,
+                  "gyro_noise_deg_h": float(np.mean(model.gyro_arw)) / np.sqrt(rec.dt) / DEG_PER_H,
+                  "velocity_white_mps": float(np.sqrt(np.mean(model.accel_quantization**2)))}
     if progress:
-        progress(f"nlp: noise from the fit: accelerometers {noise['accel_noise_ug']:.3g} ug, "
-                 f"gyros {noise['gyro_noise_deg_h']:.3g} deg/h per sample, white velocity noise "
-                 f"{noise['velocity_white_mps']:.3g} m/s (pulse quantisation)")
-    steps = np.array([kind == "rotation step" for _, kind, _, _ in problem.residual_index])
-    plain = (problem.kind == 0) & ~steps
-    ratio = (float(np.mean(rw[steps] ** 2) / np.mean(rw[plain] ** 2))
-             if steps.any() and plain.any() else 1.0)
-    info = {"ipopt_iterations": int(stats["iter_count"]), "rotation_step_ratio": ratio,
-            "rotation_steps_used": bool(use_rotation_steps), "warnings": [], "build_time": problem.build_time,
+        nat = model.natural()
+        progress(f"nlp: noise model: ARW {_fmt(nat['gyro_arw_deg_rth'])} deg/sqrt(h) ({noise_plan.source['gyro_arw']}), "
+                 f"VRW {_fmt(nat['accel_vrw_ug_rthz'])} ug/sqrt(Hz) ({noise_plan.source['accel_vrw']}); variance "
+                 f"factors velocity {assessment.factors['velocity']:.3g}, gyro {assessment.factors['gyro']:.3g}")
+        for message in warnings:
+            progress(f"nlp: warning: {message}")
+    info = {"ipopt_iterations": int(fit["stats"]["iter_count"]), "ipopt_status": fit["stats"]["return_status"],
+            "rotation_step_ratio": fit["rotation_step_ratio"], "rotation_steps_used": fit["use_rotation_steps"],
+            "warnings": warnings, "checks": assessment.checks, "variance_factor": assessment.variance_factor,
+            "variance_factors": assessment.factors, "build_time": problem.build_time,
             "residuals": problem.n_residuals, "start_offsets_arcsec": start_offsets,
-            "start_attitudes": start_attitudes, "residual_vector": rw,
+            "start_attitudes": start_attitudes, "residual_vector": fit["whitened_residuals"],
             "residual_index": problem.residual_index, "residual_kind": problem.kind, "plans": problem.groups,
-            "covariance_natural": covariance_w, "hessian": hessian, **noise}
+            "problem": problem, "covariance_natural": covariance_w, "hessian": hessian, "gls_steps": fit["gls_steps"],
+            "noise_model": model, "noise_raw": noise_plan.raw, "noise_sources": dict(noise_plan.source),
+            "noise_fitted": assessment.fitted_noise, "base_motion": noise_plan.motions,
+            "static_step_s": static_step_s, "observe_s": observe_s, **per_sample}
     return CalibrationResult("nlp", P.ParameterSet(values, covariance=covariance), initial,
-                             [reference, values], int(stats["iter_count"]), True, rms,
-                             time.perf_counter() - t_start, SIGMA_MEANING, info)
+                             [reference, values], int(fit["stats"]["iter_count"]), True,
+                             float(np.sqrt(np.mean(fit["whitened_residuals"] ** 2))), time.perf_counter() - t_start,
+                             SIGMA_MEANING, info)
+
+
+def _fmt(values) -> str:
+    return "/".join(f"{v:.3g}" for v in np.atleast_1d(values))
+
+
+def _fit(rec: Recording, problem: Problem, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
+         tolerance: float, max_iterations: int, progress) -> dict:
+    """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model)."""
+    weights = quick_weights(problem, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+    z, stats = _solve_ipopt(problem, weights, hessian, tolerance, max_iterations, progress)
+    if not stats["success"]:
+        _check_rank(np.asarray(problem.jacobian(z)[1]))  # a rank deficiency is the likelier cause: name it
+        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} "
+                               f"after {stats['iter_count']} iterations")
+    fit = _gls(rec, problem, noise_plan, dataclasses.replace(noise_plan.model), z, use_rotation_steps, progress)
+    fit["stats"] = stats
+    return fit
+
+
+def _gls(rec: Recording, problem: Problem, noise_plan: NoisePlan, model: SensorNoise, z: np.ndarray,
+         use_rotation_steps: bool, progress, update_free: bool = True) -> dict:
+    """Gauss-Newton on the Kalman-whitened residuals from ``z`` until a step is below 1 % of a sigma."""
+    gls_steps = []
+    system = None
+    for _ in range(GLS_MAX_STEPS):
+        r, jac = (np.asarray(m) for m in problem.jacobian(z))
+        r = r.ravel()
+        if system is None or gls_steps[-1] > 0.3:  # the attitudes barely move once near the answer
+            system = NoiseSystem(problem.tracks(np.asarray(problem.trajectory(z)), use_rotation_steps,
+                                                noise_plan.motions), rec.site.g, rec.site.earth_rate)
+        white = system.whiten(np.column_stack([r, jac]), model).columns
+        rw, jw = white[:, 0], white[:, 1:]
+        _check_rank(jw)
+        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        step = -vt.T @ ((u.T @ rw) / s)
+        sigma = np.sqrt(np.sum((vt.T / s) ** 2, axis=1))
+        if np.max(np.abs(step) / sigma) > 1.0:  # outside the linear region a full step may overshoot
+            step = _line_search(problem, system, model, z, step, float(rw @ rw))
+        gls_steps.append(float(np.max(np.abs(step) / sigma)))
+        z = z + step
+        rw = rw + jw @ step
+        if update_free and any(noise_plan.free_terms().values()):
+            # the terms the raw data did not determine, once, at the first linearisation; then solve again
+            model = _estimate_free_terms(model, noise_plan, system, np.column_stack([r + jac @ step, jac]))
+            update_free = False
+            continue
+        if gls_steps[-1] < GLS_TOLERANCE:
+            break
+    if progress:
+        progress("nlp: generalised least squares under the noise model, steps of "
+                 + ", ".join(f"{s:.3g}" for s in gls_steps) + " sigma")
+    covariance = (vt.T / s**2) @ vt
+    steps = problem.row_after_rotation & (problem.kind == 0)
+    plain = (problem.kind == 0) & ~steps & ~problem.row_first
+    ratio = (float(np.mean(rw[steps] ** 2) / np.mean(rw[plain] ** 2))
+             if use_rotation_steps and steps.any() and plain.any() else 1.0)
+    return {"z": z, "noise": model, "whitened_residuals": rw, "whitened_jacobian": jw, "residuals": r + jac @ step,
+            "leverage": np.sum(u**2, axis=1), "left_singular_vectors": u, "covariance_natural": covariance,
+            "gls_steps": gls_steps, "rotation_step_ratio": ratio, "use_rotation_steps": use_rotation_steps,
+            "system": system, "jacobian": jac}
+
+
+#: Search ranges of the unmodelled terms: acceleration (m/s^2), rate (rad/s).
+UNMODELLED_ACCELERATION_RANGE = (1e-8, 1e-2)
+UNMODELLED_RATE_RANGE = (1e-12, 1e-5)
+
+
+def restricted_likelihood(system: NoiseSystem, columns: np.ndarray, model: SensorNoise) -> float:
+    """Negative restricted log-likelihood of residuals linearised at a fit (``columns`` = [r, J]).
+
+    The Kalman filter gives ``log det Sigma`` and the whitened columns; the parameters are profiled out
+    (generalised least squares) and their degrees of freedom taken off (REML).
+    """
+    white = system.whiten(columns, model)
+    rw, jw = white.columns[:, 0], white.columns[:, 1:]
+    q, rr = np.linalg.qr(jw)
+    rest = rw - q @ (q.T @ rw)
+    return 0.5 * (white.log_det + float(rest @ rest)) + float(np.sum(np.log(np.abs(np.diag(rr)))))
+
+
+def estimate_terms(system: NoiseSystem, columns: np.ndarray, base: SensorNoise,
+                   terms: dict[str, tuple[float, float, float]]) -> SensorNoise:
+    """Noise terms by restricted maximum likelihood (Nelder-Mead in log scale).
+
+    ``terms`` maps a :class:`SensorNoise` field to ``(start, low, high)``; per-axis fields are scaled as a
+    whole (their shape across axes is kept from ``base`` where it is not zero).
+    """
+    from scipy.optimize import minimize
+
+    names = list(terms)
+    shapes = {}
+    for name in names:
+        value = np.asarray(getattr(base, name), dtype=float)
+        shapes[name] = value / value.max() if value.ndim and value.max() > 0 else np.ones(value.shape)
+
+    def model_of(theta):
+        out = dataclasses.replace(base)
+        for name, t in zip(names, theta):
+            level = float(np.exp(t))
+            setattr(out, name, shapes[name] * level if np.ndim(getattr(base, name)) else level)
+        return out
+
+    start = [np.log(np.clip(terms[n][0], terms[n][1], terms[n][2])) for n in names]
+    bounds = [(np.log(terms[n][1]), np.log(terms[n][2])) for n in names]
+    result = minimize(lambda t: restricted_likelihood(system, columns, model_of(t)), start, method="Nelder-Mead",
+                      bounds=bounds, options={"xatol": 0.03, "fatol": 0.05, "maxfev": 40 * len(names)})
+    return model_of(result.x)
+
+
+def estimate_unmodelled(problem: Problem, fit: dict, noise_plan: NoisePlan) -> SensorNoise:
+    """Variances of the errors outside the model, by restricted maximum likelihood at the fit.
+
+    The two terms (an acceleration constant in each static segment, a rate on each static gyro mean)
+    take the share of the misfit that the data assign to them, and the relative weight of velocity and
+    gyro residuals follows.
+    """
+    r = fit["residuals"]
+    gyro = problem.kind == 1
+    start_acc = np.sqrt(np.mean(r[problem.kind == 0] ** 2)) / 100.0  # a slope of the residuals' size per 100 s
+    start_rate = np.sqrt(np.mean(r[gyro] ** 2)) if gyro.any() else 1e-9
+    return estimate_terms(fit["system"], np.column_stack([r, fit["jacobian"]]), fit["noise"],
+                          {"unmodelled_acceleration": (start_acc, *UNMODELLED_ACCELERATION_RANGE),
+                           "unmodelled_rate": (start_rate, *UNMODELLED_RATE_RANGE)})
+
+
+def _line_search(problem: Problem, system: NoiseSystem, model: SensorNoise, z: np.ndarray, step: np.ndarray,
+                 cost: float, halvings: int = 8) -> np.ndarray:
+    """The Gauss-Newton step, halved until the whitened cost does not grow (far from the linear region:
+    residuals much larger than the noise model, as with unmodelled errors)."""
+    for _ in range(halvings):
+        if np.max(np.abs(step)) < 1e-9:
+            return step
+        trial = np.asarray(problem.residuals(z + step)).ravel()
+        new_cost = float(np.sum(system.whiten(trial, model).columns ** 2))
+        if new_cost <= cost * (1.0 + 1e-9) + 1e-12:
+            return step
+        step = step / 2.0
+    return np.zeros_like(step)
+
+
+def _estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: NoiseSystem,
+                         columns: np.ndarray) -> SensorNoise:
+    """The white-noise terms the raw data did not determine (coarse pulses hide them), by restricted
+    maximum likelihood between the floors and the raw data's upper bounds; with the accelerometers'
+    white noise also their quantization, which the sawtooth of coarse pulses makes only roughly white."""
+    free = [t for terms in noise_plan.free_terms().values() for t in terms]
+    bounds = noise_plan.raw.upper_bounds()
+    ranges = {"gyro_arw": (GYRO_ARW_FLOOR, max(float(bounds.gyro_arw.max()), GYRO_ARW_FLOOR * 10)),
+              "accel_vrw": (ACCEL_VRW_FLOOR, max(float(bounds.accel_vrw.max()), ACCEL_VRW_FLOOR * 10))}
+    model = dataclasses.replace(model)
+    for t in free:  # no shape across axes is known: one level for the three
+        setattr(model, t, np.full(3, float(np.median(getattr(model, t)))))
+    terms = {t: (float(np.max(getattr(model, t))), *ranges[t]) for t in free}
+    if "accel_vrw" in free and np.max(model.accel_quantization) > 0:
+        q = float(np.max(model.accel_quantization))
+        terms["accel_quantization"] = (q, q / 10.0, q * 10.0)
+    return estimate_terms(system, columns, model, terms)
 
 
 def _check_rank(jac: np.ndarray) -> None:
@@ -500,9 +699,3 @@ def _check_rank(jac: np.ndarray) -> None:
                                f"{', '.join(names)}")
 
 
-def _covariance(jac: np.ndarray, r: np.ndarray):
-    """``s^2 (J^T J)^-1`` of whitened residuals, ``s^2`` their variance per degree of freedom."""
-    m, n = jac.shape
-    u, s, vt = np.linalg.svd(jac, full_matrices=False)
-    variance = float(r @ r) / (m - n)
-    return (vt.T / s**2) @ vt * variance, float(np.sqrt(variance))

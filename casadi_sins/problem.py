@@ -55,14 +55,34 @@ class Timing:
 
 @dataclasses.dataclass(frozen=True)
 class Deviations:
-    """How the simulated experiment departs from nominal, and the sensor noise."""
+    """How the simulated experiment departs from nominal, and the sensor noise.
+
+    White noise may be given per sample (``accel_noise_ug``, ``gyro_noise_deg_h``, the paper's way)
+    or as a density (``accel_vrw_ug_rthz``, ``gyro_arw_deg_rth``); both add.  Bias instability is a
+    first-order Gauss-Markov process per axis (steady-state 1 sigma, correlation time).  Sway turns
+    the whole base about the unit's centre: per ENU axis ``sway_components`` sinusoids with
+    amplitudes uniform in ``sway_amplitude_arcsec`` and periods log-uniform in ``sway_period_s``.
+    """
 
     start_attitude_deg: float = 0.4  # each start attitude angle off nominal by +/- this (random sign)
     rotation_rate_factor: float = 0.004  # rotation rate scaled by U(1 - r, 1 + r)
     cross_axis_rate: float = 0.004  # the two other body axes turn at this fraction of the rate
     accel_noise_ug: float = 50.0  # white, per sample, 1 sigma
     gyro_noise_deg_h: float = 0.01  # white, per sample, 1 sigma
+    accel_vrw_ug_rthz: float = 0.0  # white, velocity random walk density, ug/sqrt(Hz)
+    gyro_arw_deg_rth: float = 0.0  # white, angle random walk density, deg/sqrt(h)
+    accel_bias_instability_ug: float = 0.0  # Gauss-Markov, steady-state 1 sigma
+    accel_bias_tau_s: float = 900.0
+    gyro_bias_instability_deg_h: float = 0.0
+    gyro_bias_tau_s: float = 600.0
+    sway_amplitude_arcsec: tuple[float, float] = (0.0, 0.0)
+    sway_period_s: tuple[float, float] = (2.0, 20.0)
+    sway_components: int = 2
     quantize: bool = False  # integer pulses, remainder carried
+
+    @property
+    def sways(self) -> bool:
+        return max(self.sway_amplitude_arcsec) > 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -179,8 +199,30 @@ def load_problem(path: str | Path | None = None) -> Problem:
     unknown = set(err_doc) - known
     if unknown:
         raise ProblemError(f"{path}: [errors] unknown key(s) {', '.join(sorted(unknown))}")
-    deviations = Deviations(**{k: (bool(v) if k == "quantize" else number(err_doc, k, "errors"))
-                               for k, v in err_doc.items()})
+    def deviation(key, value):
+        if key == "quantize":
+            if not isinstance(value, bool):
+                raise ProblemError(f"{path}: [errors] quantize must be true or false")
+            return value
+        if key == "sway_components":
+            count = number(err_doc, key, "errors")
+            if count != int(count) or count < 1:
+                raise ProblemError(f"{path}: [errors] sway_components must be a positive integer")
+            return int(count)
+        if key in ("sway_amplitude_arcsec", "sway_period_s"):
+            pair = value if isinstance(value, list) else [value, value]
+            if len(pair) != 2:
+                raise ProblemError(f"{path}: [errors] {key} must be a number or [low, high]")
+            low, high = (number({"v": v}, "v", f"errors {key}") for v in pair)
+            if not 0.0 <= low <= high or (key == "sway_period_s" and low <= 0.0):
+                raise ProblemError(f"{path}: [errors] {key} must be 0 <= low <= high (periods > 0)")
+            return (low, high)
+        result = number(err_doc, key, "errors")
+        if result < 0.0 or (key.endswith("_tau_s") and result == 0.0):
+            raise ProblemError(f"{path}: [errors] {key} must be positive")
+        return result
+
+    deviations = Deviations(**{k: deviation(k, v) for k, v in err_doc.items()})
 
     truth_doc = section("truth")
     values = {}

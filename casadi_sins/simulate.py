@@ -27,7 +27,7 @@ from . import frames
 from . import parameters as P
 from .problem import Problem
 from .recording import Recording, write_recording
-from .units import DEG, DEG_PER_H, UG
+from .units import ARCSEC, DEG, DEG_PER_H, UG
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
 
@@ -70,6 +70,7 @@ class Simulation:
     static_attitudes: list[np.ndarray]  # true C_b^n in each static segment, in order
     rate_factors: list[float]
     seed: int | None
+    sway: "Sway | None" = None
 
 
 def rotation_vector_robust(dcm: np.ndarray) -> np.ndarray:
@@ -121,8 +122,75 @@ def plan_motion(problem: Problem, rng: np.random.Generator):
     return pieces, starts, statics, factors
 
 
-def true_increments(pieces: list[Motion], n_samples: int, dt: float, earth_rate: np.ndarray, gravity: float):
-    """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1."""
+@dataclasses.dataclass(frozen=True)
+class Sway:
+    """Rotation of the whole base about the unit's centre: ``C_b^n(t) = exp([s(t) x]) C_table(t)``.
+
+    ``s(t)`` (ENU rotation vector, rad) is a sum of sinusoids per axis; the base turns the unit
+    about its centre, so the specific force stays gravity and only the rate changes.
+    """
+
+    amplitude: np.ndarray  # (3, M) rad
+    omega: np.ndarray  # (3, M) rad/s
+    phase: np.ndarray  # (3, M) rad
+
+    @classmethod
+    def draw(cls, amplitude_rad: tuple[float, float], period_s: tuple[float, float], components: int,
+             rng: np.random.Generator) -> "Sway":
+        amp = rng.uniform(amplitude_rad[0], amplitude_rad[1], size=(3, components))
+        period = np.exp(rng.uniform(np.log(period_s[0]), np.log(period_s[1]), size=(3, components)))
+        return cls(amp, 2.0 * np.pi / period, rng.uniform(0.0, 2.0 * np.pi, size=(3, components)))
+
+    def angle(self, t: np.ndarray) -> np.ndarray:
+        """``s(t)``, shape ``t.shape + (3,)``."""
+        arg = np.asarray(t)[..., None, None] * self.omega + self.phase
+        return np.sum(self.amplitude * np.sin(arg), axis=-1)
+
+    def angle_rate(self, t: np.ndarray) -> np.ndarray:
+        arg = np.asarray(t)[..., None, None] * self.omega + self.phase
+        return np.sum(self.amplitude * self.omega * np.cos(arg), axis=-1)
+
+    def attitude(self, t: np.ndarray) -> np.ndarray:
+        """``exp([s x])``, shape ``t.shape + (3, 3)``."""
+        return _exp_so3(self.angle(t))
+
+    def rate(self, t: np.ndarray) -> np.ndarray:
+        """Angular rate of the base in n (rad/s): ``J_l(s) s_dot`` (left Jacobian of SO(3))."""
+        s, s_dot = self.angle(t), self.angle_rate(t)
+        theta2 = np.sum(s * s, axis=-1)[..., None]
+        small = theta2 < 1e-12
+        theta = np.sqrt(np.where(small, 1.0, theta2))
+        a = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(theta)) / np.where(small, 1.0, theta2))
+        b = np.where(small, 1.0 / 6.0 - theta2 / 120.0, (theta - np.sin(theta)) / (theta * np.where(small, 1.0, theta2)))
+        cross = np.cross(s, s_dot)
+        return s_dot + a * cross + b * np.cross(s, cross)
+
+
+def _exp_so3(rotvec: np.ndarray) -> np.ndarray:
+    """Rotation matrices of rotation vectors (..., 3) -> (..., 3, 3) (Rodrigues, series near zero)."""
+    theta2 = np.sum(rotvec * rotvec, axis=-1)[..., None, None]
+    small = theta2 < 1e-12
+    theta = np.sqrt(np.where(small, 1.0, theta2))
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(theta) / theta)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(theta)) / np.where(small, 1.0, theta2))
+    x, y, z = rotvec[..., 0], rotvec[..., 1], rotvec[..., 2]
+    zero = np.zeros_like(x)
+    k = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+#: Sample pieces integrated at once by quadrature (bounds the memory of long recordings).
+_QUADRATURE_CHUNK = 20000
+
+
+def true_increments(pieces: list[Motion], n_samples: int, dt: float, earth_rate: np.ndarray, gravity: float,
+                    sway: Sway | None = None):
+    """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1.
+
+    Without sway a static piece is integrated in closed form; everything else by 6-point
+    Gauss-Legendre quadrature on each sample's part of the piece (the integrands are analytic
+    there): ``dtheta = int C^T (w_ie + w_sway) dt + u (alpha(b) - alpha(a))``, ``dv = int C^T g^n dt``.
+    """
     edges = np.arange(n_samples + 1) * dt
     dtheta = np.zeros((n_samples, 3))
     dv = np.zeros((n_samples, 3))
@@ -131,23 +199,43 @@ def true_increments(pieces: list[Motion], n_samples: int, dt: float, earth_rate:
     for piece in pieces:
         inner = edges[(edges > piece.t0 + eps) & (edges < piece.t1 - eps)]
         points = np.concatenate([[piece.t0], inner, [min(piece.t1, edges[-1])]])
-        a, b = points[:-1], points[1:]
-        keep = b > a + eps
-        a, b = a[keep], b[keep]
-        sample = np.clip(np.searchsorted(edges, 0.5 * (a + b)) - 1, 0, n_samples - 1)
-        if piece.axis is None:
-            integral = (b - a)[:, None, None] * (piece.attitude.T @ references)[None]
-            turned = np.zeros((len(a), 3))
-        else:
-            nodes = a[:, None] + (b - a)[:, None] * (1.0 + _GAUSS_X[None, :]) / 2.0
-            weights = (b - a)[:, None] * _GAUSS_W[None, :] / 2.0
-            c_nodes = piece.attitude_at(nodes)  # (M, J, 3, 3)
-            values = np.swapaxes(c_nodes, -1, -2) @ references  # (M, J, 3, 2)
-            integral = np.einsum("mj,mjkl->mkl", weights, values)
-            turned = np.outer(piece.angle_at(b) - piece.angle_at(a), piece.axis)
-        np.add.at(dtheta, sample, integral[:, :, 0] + turned)
-        np.add.at(dv, sample, integral[:, :, 1])
+        a_all, b_all = points[:-1], points[1:]
+        keep = b_all > a_all + eps
+        a_all, b_all = a_all[keep], b_all[keep]
+        for first in range(0, len(a_all), _QUADRATURE_CHUNK):
+            a, b = a_all[first:first + _QUADRATURE_CHUNK], b_all[first:first + _QUADRATURE_CHUNK]
+            sample = np.clip(np.searchsorted(edges, 0.5 * (a + b)) - 1, 0, n_samples - 1)
+            if piece.axis is None and sway is None:
+                integral = (b - a)[:, None, None] * (piece.attitude.T @ references)[None]
+            else:
+                nodes = a[:, None] + (b - a)[:, None] * (1.0 + _GAUSS_X[None, :]) / 2.0
+                weights = (b - a)[:, None] * _GAUSS_W[None, :] / 2.0
+                c_nodes = piece.attitude_at(nodes)  # (M, J, 3, 3)
+                if sway is None:
+                    values = np.swapaxes(c_nodes, -1, -2) @ references  # (M, J, 3, 2)
+                else:
+                    c_nodes = sway.attitude(nodes) @ c_nodes
+                    rate = earth_rate + sway.rate(nodes)  # (M, J, 3)
+                    gravity_n = np.broadcast_to([0.0, 0.0, gravity], rate.shape)
+                    values = np.swapaxes(c_nodes, -1, -2) @ np.stack([rate, gravity_n], axis=-1)
+                integral = np.einsum("mj,mjkl->mkl", weights, values)
+            turned = (np.zeros((len(a), 3)) if piece.axis is None
+                      else np.outer(piece.angle_at(b) - piece.angle_at(a), piece.axis))
+            np.add.at(dtheta, sample, integral[:, :, 0] + turned)
+            np.add.at(dv, sample, integral[:, :, 1])
     return dtheta, dv
+
+
+def gauss_markov(n: int, dt: float, sigma: float, tau: float, rng: np.random.Generator) -> np.ndarray:
+    """A first-order Gauss-Markov process per axis, (n, 3), stationary from the start (exact AR(1))."""
+    if sigma == 0.0:
+        return np.zeros((n, 3))
+    phi = np.exp(-dt / tau)
+    drive = rng.standard_normal((n, 3)) * sigma * np.sqrt(1.0 - phi**2)
+    drive[0] = rng.standard_normal(3) * sigma
+    from scipy.signal import lfilter
+
+    return lfilter([1.0], [1.0, -phi], drive, axis=0)
 
 
 def quantize(pulses: np.ndarray) -> np.ndarray:
@@ -169,15 +257,23 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     """
     rng = np.random.default_rng(seed)
     pieces, starts, statics, factors = plan_motion(problem, rng)
+    dev = problem.deviations
+    # drawn after the motion, so that adding sway leaves the other draws of a seed as they were
+    sway = (Sway.draw(tuple(a * ARCSEC for a in dev.sway_amplitude_arcsec), dev.sway_period_s,
+                      dev.sway_components, rng) if dev.sways else None)
     dt = 1.0 / problem.rate_hz
     duration = pieces[-1].t1
     n_samples = int(round(duration * problem.rate_hz))
     g = problem.site.g
-    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g)
+    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway)
     if noise:
-        dev = problem.deviations
-        dtheta = dtheta + rng.standard_normal(dtheta.shape) * dev.gyro_noise_deg_h * DEG_PER_H * dt
-        dv = dv + rng.standard_normal(dv.shape) * dev.accel_noise_ug * UG * dt
+        gyro_white = np.hypot(dev.gyro_noise_deg_h * DEG_PER_H * dt, dev.gyro_arw_deg_rth * DEG / 60.0 * np.sqrt(dt))
+        accel_white = np.hypot(dev.accel_noise_ug * UG * dt, dev.accel_vrw_ug_rthz * UG * np.sqrt(dt))
+        dtheta = dtheta + rng.standard_normal(dtheta.shape) * gyro_white
+        dv = dv + rng.standard_normal(dv.shape) * accel_white
+        dtheta += dt * gauss_markov(n_samples, dt, dev.gyro_bias_instability_deg_h * DEG_PER_H,
+                                    dev.gyro_bias_tau_s, rng)
+        dv += dt * gauss_markov(n_samples, dt, dev.accel_bias_instability_ug * UG, dev.accel_bias_tau_s, rng)
     gyro, accel = P.output_model(dtheta, dv, problem.truth.values, dt)
     if problem.deviations.quantize:
         gyro, accel = quantize(gyro), quantize(accel)
@@ -185,7 +281,10 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     rec_name = name or (f"{problem.name}-seed{seed}" if seed is not None else problem.name)
     recording = Recording(name=rec_name, site=problem.site, rate_hz=problem.rate_hz, segments=problem.segments(),
                           time=time, gyro=gyro, accel=accel)
-    return Simulation(recording, problem.truth, starts, statics, factors, seed)
+    if sway is not None:  # the true start of a group on a swaying base
+        first = {seg.group: seg.start for seg in reversed(recording.segments)}
+        starts = {g: sway.attitude(np.array(first[g])) @ c for g, c in starts.items()}
+    return Simulation(recording, problem.truth, starts, statics, factors, seed, sway)
 
 
 def write_simulation(sim: Simulation, out_dir: str | Path) -> Path:

@@ -15,11 +15,13 @@ class CliError(Exception):
 
 
 def _known_errors():
+    from .io import OutputError
+    from .noise import NoiseSpecError
     from .parameters import ParameterTableError
     from .problem import ProblemError
     from .recording import RecordingError
 
-    return (RecordingError, ParameterTableError, ProblemError, CliError)
+    return (RecordingError, ParameterTableError, ProblemError, NoiseSpecError, OutputError, CliError)
 
 
 # --------------------------------------------------------------------------- commands
@@ -93,28 +95,59 @@ def cmd_navigate(args) -> int:
 
 
 def cmd_calibrate(args) -> int:
-    from .parameters import read_table, write_table
+    from .calibration_report import report_files
+    from .io import check_writable, write_files
+    from .noise import read_noise_spec
+    from .parameters import read_table, table_text
     from .recording import read_recording
-    from .report import parameter_report, write_calibration_report
+    from .report import parameter_report
     from .result import CalibrationError
     from .solvers import calibrate
 
+    check_writable(args.out)  # before any computation
+    if args.report:
+        check_writable(args.report, directory=True)
     rec = read_recording(args.recording)
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
+    noise = read_noise_spec(args.noise) if args.noise else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
-        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, **options)
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, **options)
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
-    write_table(args.out, result.parameters, truth)
-    print(f"{args.solver}: {result.iterations} iterations, {result.wall_time:.2f} s; wrote {args.out}")
-    if args.report:
-        write_calibration_report(result, args.report, rec.name, truth)
-        print(f"wrote report to {args.report}")
-    print(parameter_report(result, truth).drop(columns=["unit"]).to_string(
-        index=False, float_format=lambda x: f"{x:.6g}"))
+    warnings = result.info.get("warnings", [])
+    if args.strict and warnings:
+        raise CliError(f"{rec.label}: --strict and {len(warnings)} warning(s), no parameter table written: "
+                       + " | ".join(warnings))
+    files = {Path(args.out): table_text(result.parameters, truth).encode()}
+    files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv)))
+    write_files(files)
+    frame = parameter_report(result, truth)
+    print(natural_table(frame).to_string(index=False))
+    print(f"{args.solver}: {result.iterations} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
+          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
+    for message in warnings:
+        print(f"WARNING: {message}", file=sys.stderr)
     return 0
+
+
+def natural_table(frame):
+    """The terminal table: values and sigma in natural units (SI stays in the CSV)."""
+    import pandas as pd
+
+    from .calibration_report import natural_value
+
+    values = [natural_value(name, value) for name, value in zip(frame["parameter"], frame["value"])]
+    out = pd.DataFrame({"parameter": frame["parameter"],
+                        "value": [f"{v:.9g}" if u == "m/s/pulse" else f"{v:.6g}" for v, u in values],
+                        "unit": [u for _, u in values],
+                        "1-sigma": [f"{s:.3g}" for s in frame["sigma (natural)"]],
+                        "sigma unit": frame["natural unit"]})
+    if "error (natural)" in frame:
+        out["error"] = [f"{e:+.3g}" for e in frame["error (natural)"]]
+        out["error/sigma"] = [f"{e:+.2f}" for e in frame["error/sigma"]]
+    return out
 
 
 def cmd_compare(args) -> int:
@@ -322,6 +355,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--truth", help="truth table: adds errors in natural units to the table and report")
     p.add_argument("--initial", help="starting parameter table (default: the paper's rough values)")
     p.add_argument("--max-iterations", type=int, help="iteration limit (default 10)")
+    p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
+                   "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
+    p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")

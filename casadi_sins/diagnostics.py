@@ -91,8 +91,8 @@ def assess(rec, problem, fit: dict, noise_plan) -> Assessment:
         passed = low <= limit
         model_fails |= not passed
         checks.append(Check("drift within static segments", low, limit, passed,
-                            f"mean square of the segment sums of whitened velocity residuals over {dof} "
-                            "segment-axes (1 without drift)"))
+                            f"mean square of the segment sums of whitened velocity residuals ({dof:.0f} degrees "
+                            "of freedom after the fit; 1 without drift)"))
         if not passed:
             inflate = max(inflate, low)
             warnings.append(f"the velocity drifts within static segments {np.sqrt(low):.3g} times more than the "

@@ -302,7 +302,7 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
     params = initial.values.copy()
     noise_plan = plan_noise(rec, params, noise)
     motion = describe_motion(noise_plan.motions)
-    warnings = []
+    warnings = list(rec.warnings)
     if motion:
         if not allow_base_motion:
             raise CalibrationError(f"{motion}; the paper's method aligns each group on a still base and would "

@@ -33,3 +33,55 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
             os.unlink(tmp)
         raise
     return path
+
+
+class OutputError(OSError):
+    """An output location that cannot be written; the message names it."""
+
+
+def check_writable(path: str | Path, directory: bool = False) -> Path:
+    """Fail early (before any computation) when ``path`` cannot be written.
+
+    A file target must not be a folder and its folder must be creatable and writable; a folder target
+    must not be a file.
+    """
+    path = Path(path)
+    if directory:
+        if path.exists() and not path.is_dir():
+            raise OutputError(f"{path}: exists and is not a folder")
+        folder = path
+    else:
+        if path.is_dir():
+            raise OutputError(f"{path}: is a folder, not a file to write")
+        folder = path.parent
+    probe = folder
+    while not probe.exists():  # the first existing ancestor must let us create the rest
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputError(f"{path}: {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise OutputError(f"{path}: {probe} is not writable")
+    return path
+
+
+def write_files(files: dict[Path, bytes]) -> list[Path]:
+    """Write several files as one: all are staged as temporary files first and renamed only when every
+    one was written, so that a failure leaves none of them (and no temporary) behind."""
+    staged: list[tuple[str, Path]] = []
+    try:
+        for path, data in files.items():
+            path = Path(path)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+            staged.append((tmp, path))
+            with os.fdopen(fd, "wb") as handle:
+                handle.write(data)
+            os.chmod(tmp, 0o666 & ~_umask())
+        for tmp, path in staged:
+            os.replace(tmp, path)
+    except BaseException:
+        for tmp, _ in staged:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+        raise
+    return [path for _, path in staged]

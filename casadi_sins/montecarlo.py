@@ -33,16 +33,35 @@ def group_of(index: int) -> str:
     raise IndexError(index)
 
 
-def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",)) -> list[dict]:
-    """Simulate one seed and calibrate it with each solver; one row per solver and parameter."""
+def datasheet(problem: Problem):
+    """The sensor datasheet of a problem: its bias instability (which no recording of minutes can show)."""
+    from .noise import SensorNoise
+    from .units import DEG_PER_H, UG
+
+    dev = problem.deviations
+    if not (dev.gyro_bias_instability_deg_h or dev.accel_bias_instability_ug):
+        return None
+    return SensorNoise(gyro_bias_instability=dev.gyro_bias_instability_deg_h * DEG_PER_H,
+                       gyro_bias_tau=dev.gyro_bias_tau_s, accel_bias_instability=dev.accel_bias_instability_ug * UG,
+                       accel_bias_tau=dev.accel_bias_tau_s)
+
+
+def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use_datasheet: bool = True
+             ) -> list[dict]:
+    """Simulate one seed and calibrate it with each solver; one row per solver and parameter.
+
+    ``use_datasheet`` gives the calibration the problem's bias instability, as an engineer would from
+    the unit's datasheet (the white noise is always measured from the recording).
+    """
     from .simulate import simulate
     from .solvers import calibrate
 
     sim = simulate(problem, seed=seed)
     rows = []
+    noise = datasheet(problem) if use_datasheet else None
     for solver in solvers:
         try:
-            res = calibrate(sim.recording, solver=solver)
+            res = calibrate(sim.recording, solver=solver, noise=noise)
         except CalibrationError as exc:
             rows.append({"seed": seed, "solver": solver, "failed": str(exc)})
             continue
@@ -54,12 +73,14 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",)) -> 
             rows.append({"seed": seed, "solver": solver, "parameter": name, "group": group_of(i),
                          "unit": P.NATURAL_UNITS[i], "error": err[i], "sigma": sigma[i],
                          "first_iteration_error": first[i], "iterations": res.iterations,
-                         "wall_time": res.wall_time, "failed": ""})
+                         "wall_time": res.wall_time, "warnings": len(res.info.get("warnings", [])),
+                         "failed": ""})
     return rows
 
 
 def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",), workers: int | None = None,
-        progress: Callable[[int, int], None] | None = None, scheduler: str | None = None) -> pd.DataFrame:
+        progress: Callable[[int, int], None] | None = None, scheduler: str | None = None,
+        use_datasheet: bool = True) -> pd.DataFrame:
     """Run seeds in parallel; rows of :func:`run_seed`.
 
     Parameters
@@ -72,10 +93,10 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
     """
     rows: list[dict] = []
     with _single_threaded_children():
-        return _run(problem, seeds, solvers, workers, progress, scheduler, rows)
+        return _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet)
 
 
-def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.DataFrame:
+def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet) -> pd.DataFrame:
     if scheduler:
         try:
             from dask.distributed import Client, LocalCluster
@@ -86,7 +107,8 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.Data
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                                processes=True) if scheduler == "local" else None
         with Client(cluster if cluster is not None else scheduler) as client:
-            futures = [client.submit(run_seed, problem, seed, tuple(solvers), pure=False) for seed in seeds]
+            futures = [client.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, pure=False)
+                       for seed in seeds]
             for k, fut in enumerate(dask_completed(futures), 1):
                 rows += fut.result()
                 if progress:
@@ -97,14 +119,14 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows) -> pd.Data
     workers = workers or os.cpu_count() or 1
     if workers == 1:
         for k, seed in enumerate(seeds, 1):
-            rows += run_seed(problem, seed, solvers)
+            rows += run_seed(problem, seed, solvers, use_datasheet)
             if progress:
                 progress(k, len(seeds))
         return pd.DataFrame(rows)
     import multiprocessing
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_seed, problem, seed, tuple(solvers)) for seed in seeds]
+        futures = [pool.submit(run_seed, problem, seed, tuple(solvers), use_datasheet) for seed in seeds]
         for k, fut in enumerate(as_completed(futures), 1):
             rows += fut.result()
             if progress:
@@ -183,6 +205,8 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
         runs=("error", "size")).reset_index()
     z = ok.assign(z=np.abs(ok["error"] / ok["sigma"])).groupby(["solver", "parameter"], sort=False)["z"].max()
     out["max_abs_z"] = z.to_numpy()
+    beyond = ok.assign(b=np.abs(ok["error"] / ok["sigma"]) > 4.5).groupby(["solver", "parameter"], sort=False)["b"]
+    out["beyond_4_5_sigma"] = beyond.sum().to_numpy()
     out["rms_over_sigma"] = out["rms_error"] / out["mean_sigma"]
     out["floor"] = [NOISE_FLOOR[g][0] for g in out["group"]]
     out["rms_over_floor"] = out["rms_error"] / out["floor"]

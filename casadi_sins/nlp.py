@@ -453,7 +453,7 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
         if swaying:
             progress(f"nlp: {swaying}; static segments stepped at {static_step_s:g} s")
     modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
-    warnings = []
+    warnings = list(rec.warnings)
     for mode in modes:
         fit = _fit(rec, problem, noise_plan, mode, hessian, tolerance, max_iterations, progress)
         if mode and len(modes) > 1 and fit["rotation_step_ratio"] > STEP_CONSISTENCY_LIMIT:

@@ -271,19 +271,23 @@ class ParameterSet:
         return frame
 
 
-def write_table(path: str | Path, params: ParameterSet, truth: ParameterSet | None = None,
-                as_truth: bool = False) -> Path:
-    """Write the parameter table CSV (header ``parameter,unit,value,sigma``, more columns after), atomically.
+def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False) -> str:
+    """The parameter table CSV (header ``parameter,unit,value,sigma``, more columns after).
 
-    ``as_truth`` writes a truth file (``parameter,unit,value``).
+    ``as_truth`` gives a truth file (``parameter,unit,value``).
     """
-    from .io import atomic_write_text
-
     frame = params.to_frame(truth)
     if as_truth:
         frame = frame[["parameter", "unit", "value"]]
-    text = frame.to_csv(index=False, float_format="%.12g", na_rep="")
-    return atomic_write_text(path, text)
+    return frame.to_csv(index=False, float_format="%.12g", na_rep="")
+
+
+def write_table(path: str | Path, params: ParameterSet, truth: ParameterSet | None = None,
+                as_truth: bool = False) -> Path:
+    """Write the parameter table CSV (:func:`table_text`) atomically."""
+    from .io import atomic_write_text
+
+    return atomic_write_text(path, table_text(params, truth, as_truth))
 
 
 def read_table(path: str | Path) -> ParameterSet:

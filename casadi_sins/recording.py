@@ -24,6 +24,11 @@ PULSE_COLUMNS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 COLUMNS = ("time",) + PULSE_COLUMNS
 #: Two times closer than this fraction of a sample interval are the same instant.
 TIME_TOLERANCE = 1e-3
+#: The mean sample interval may differ from 1/rate_hz by this much (relative) unnoticed; up to
+#: RATE_ERROR_LIMIT it is a warning (a time column from another clock), beyond that an error: every
+#: scale factor would absorb it (100.05 Hz labelled 100 Hz is +500 ppm on each).
+RATE_WARNING = 1e-6
+RATE_ERROR_LIMIT = 1e-4
 #: How far (s) a segment may reach past the first or last sample: time-tag conventions differ
 #: (a segment "from 0 s" over data whose first interval starts at one sample period).
 SEGMENT_OVERHANG_S = 1.0
@@ -92,6 +97,7 @@ class Recording:
     gyro: np.ndarray
     accel: np.ndarray
     source: Path | None = None
+    warnings: list[str] = dataclasses.field(default_factory=list)  # doubts about the data, for the reports
 
     @property
     def dt(self) -> float:
@@ -172,6 +178,9 @@ def read_recording(path: str | Path) -> Recording:
     time, pulses = _read_samples(data_path, rate_hz)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time,
                     gyro=pulses[:, :3], accel=pulses[:, 3:], source=path)
+    rate_warning = check_rate(time, rate_hz, data_path)
+    if rate_warning:
+        rec.warnings.append(rate_warning)
     validate_schedule(rec)
     return rec
 
@@ -278,6 +287,28 @@ def _read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarr
         raise RecordingError(f"{data_path}, line {row + 2}: time step {step[row - 1]:.6g} s differs from "
                              f"1/rate_hz = {dt:.6g} s (time must be uniform)")
     return time, values[:, 1:]
+
+
+def check_rate(time: np.ndarray, rate_hz: float, where) -> str | None:
+    """Compare the time column's mean rate with ``rate_hz``; a warning text, or raise beyond the limit.
+
+    The rate is the least-squares slope of time against sample number; its resolution follows from the
+    scatter of the time tags about that line (rounded tags), so a short file with coarse tags is not
+    blamed for what it cannot show.
+    """
+    n = len(time)
+    index = np.arange(n, dtype=float) - (n - 1) / 2.0
+    slope = float(index @ (time - time.mean()) / (index @ index))
+    scatter = time - time.mean() - slope * index
+    resolution = float(np.sqrt(np.mean(scatter**2) / (index @ index)))
+    deviation = slope * rate_hz - 1.0
+    if abs(deviation) <= max(RATE_WARNING, 5.0 * resolution * rate_hz):
+        return None
+    text = (f"{where}: the time column runs at {1.0 / slope:.9g} Hz, rate_hz says {rate_hz:g} Hz "
+            f"({deviation * 1e6:+.3g} ppm); every scale factor would absorb the difference")
+    if abs(deviation) > RATE_ERROR_LIMIT:
+        raise RecordingError(text + ": correct rate_hz or the time column")
+    return text + " (within 100 ppm: calibrated with rate_hz; check which clock is right)"
 
 
 def validate_schedule(rec: Recording) -> None:

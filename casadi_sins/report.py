@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from . import parameters as P
-from .io import atomic_write_bytes, atomic_write_text
+from .io import atomic_write_bytes
 from .recording import Recording
 from .strapdown import GroupNavigation, static_velocities
 
@@ -41,12 +41,19 @@ def static_velocity_table(rec: Recording, navs: list[GroupNavigation]) -> pd.Dat
     return pd.DataFrame(rows)
 
 
+def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
+                float_format: str = "%.6g") -> dict[Path, bytes]:
+    """A DataFrame as the contents of ``stem.csv`` and ``stem.md``."""
+    stem = Path(stem)
+    md = (f"# {title}\n\n" if title else "") + markdown_table(frame, float_format) + "\n"
+    return {stem.with_name(stem.name + ".csv"): frame.to_csv(index=False, float_format=float_format).encode(),
+            stem.with_name(stem.name + ".md"): md.encode()}
+
+
 def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g"):
     """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically)."""
-    stem = Path(stem)
-    atomic_write_text(stem.with_suffix(".csv"), frame.to_csv(index=False, float_format=float_format))
-    md = markdown_table(frame, float_format)
-    atomic_write_text(stem.with_suffix(".md"), (f"# {title}\n\n" if title else "") + md + "\n")
+    for path, content in frame_files(frame, stem, title, float_format).items():
+        atomic_write_bytes(path, content)
 
 
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:
@@ -63,8 +70,8 @@ def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:
     return "\n".join([header, rule, *body])
 
 
-def save_figure(fig, path: str | Path) -> Path:
-    """Save a matplotlib figure as PNG atomically and close it."""
+def save_figure(fig, path):
+    """Save a matplotlib figure as PNG (atomically to a path, or into a binary file object) and close it."""
     import io
 
     import matplotlib.pyplot as plt
@@ -72,6 +79,9 @@ def save_figure(fig, path: str | Path) -> Path:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
     plt.close(fig)
+    if hasattr(path, "write"):
+        path.write(buffer.getvalue())
+        return path
     return atomic_write_bytes(path, buffer.getvalue())
 
 

@@ -35,3 +35,27 @@ def test_rough_writes_a_parameter_table(tmp_path, short_problem):
     assert main(["rough", str(path), "--out", str(tmp_path / "rough.csv")]) == 0
     rough = P.read_table(tmp_path / "rough.csv")
     assert rough["gyro_misalign_xy"] == 0.0 and rough["accel_scale_y"] > 0
+
+
+def test_calibrate_writes_the_table_with_its_report_and_strict_refuses_on_a_warning(tmp_path, kang_sim, capsys):
+    """Every doubt reaches the report files (issue 9); --strict turns it into a failure with no output."""
+    import json
+
+    from casadi_sins.recording import write_recording
+
+    path = write_recording(kang_sim.recording, tmp_path / "r.toml")
+    csv = path.with_suffix(".csv")
+    lines = csv.read_text().splitlines()
+    csv.write_text("\n".join([lines[0]] + [f"{k / 100.0005:.9f}," + line.split(",", 1)[1]
+                                           for k, line in enumerate(lines[1:], start=1)]) + "\n")
+    out = tmp_path / "out" / "params.csv"
+    assert main(["calibrate", str(path), "--out", str(out), "--strict"]) == 2
+    assert "--strict and 1 warning(s)" in capsys.readouterr().err and not (tmp_path / "out").exists()
+    assert main(["calibrate", str(path), "--out", str(out), "--report", str(tmp_path / "rep")]) == 0
+    report = json.loads((tmp_path / "out" / "params.report.json").read_text())
+    assert any("-5 ppm" in w for w in report["warnings"]) and report["ipopt"]["status"] == "Solve_Succeeded"
+    assert report["noise"]["sources"]["accel_vrw"] == "raw data" and len(report["parameters"]) == 21
+    assert "-5 ppm" in (tmp_path / "out" / "params.report.md").read_text()
+    assert (tmp_path / "rep" / f"{kang_sim.recording.name}-nlp-residuals.png").stat().st_size > 10000
+    assert "WARNING" in capsys.readouterr().err
+    assert P.read_table(out).sigma is not None

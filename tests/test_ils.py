@@ -76,3 +76,15 @@ def test_calibrate_command_writes_table_and_report(kang_sim, tmp_path):
     assert table.sigma is not None and np.all(table.sigma > 0)
     md = (tmp_path / "r" / f"{kang_sim.recording.name}-ils-iterations.md").read_text()
     assert "iteration 3" in md and "error iteration 1" in md
+
+
+def test_navigation_grade_noise_keeps_the_sigma_honest(kang_problem):
+    """The equations' covariance under the sensor noise model (gyro ARW tilting whole groups, alignment
+    noise) keeps the paper's method honest with 120x the paper's gyro noise (one seed, loose bounds)."""
+    sim = simulate(kang_problem.with_changes(accel_noise_ug=0.0, gyro_noise_deg_h=0.0, accel_vrw_ug_rthz=15.0,
+                                             gyro_arw_deg_rth=0.002), seed=4)
+    result = calibrate_ils(sim.recording)
+    sigma = result.parameters.sigma / P.NATURAL_SCALE
+    sigma[P.SCALE_MASK] /= result.parameters.values[P.SCALE_MASK]
+    z = P.natural_errors(result.parameters.values, sim.truth.values) / sigma
+    assert np.abs(z).max() < 4.5 and 0.4 < np.sqrt(np.mean(z**2)) < 1.6

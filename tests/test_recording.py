@@ -152,3 +152,30 @@ def test_written_recording_follows_the_format_for_an_independent_reader(written)
     # the first interval ends at time[0] and is 1/rate long; time is uniform
     assert times[0] == pytest.approx(dt) and np.allclose(np.diff(times), dt)
     assert float(rows[1][5]) == sim.recording.accel[0, 1]
+
+
+def _retime(path, rate):
+    """Rewrite the time column as if the samples came at ``rate`` Hz (full precision)."""
+    def mutate(lines):
+        out = [lines[0]]
+        for k, line in enumerate(lines[1:], start=1):
+            out.append(f"{k / rate:.9f}," + line.split(",", 1)[1])
+        return out
+    edit_csv(path, mutate)
+
+
+def test_a_time_column_at_another_rate_than_rate_hz_is_rejected_naming_the_file(written, tmp_path):
+    """100.05 Hz labelled 100 Hz would put +500 ppm on every scale factor (issue 9)."""
+    path = copy_recording(written[1], tmp_path)
+    _retime(path, 100.05)
+    with pytest.raises(RecordingError, match=r"r\.csv: the time column runs at 100\.05 Hz, rate_hz says 100 Hz "
+                                             r"\(-500 ppm\)"):
+        read_recording(path)
+
+
+def test_a_few_ppm_of_clock_difference_is_a_warning_carried_to_the_report(written, tmp_path):
+    path = copy_recording(written[1], tmp_path)
+    _retime(path, 100.0005)
+    rec = read_recording(path)
+    assert len(rec.warnings) == 1 and "-5 ppm" in rec.warnings[0] and "r.csv" in rec.warnings[0]
+    assert read_recording(written[1]).warnings == []

@@ -1,0 +1,297 @@
+"""The report of a calibration: what an engineer needs to trust (or refuse) a parameter table.
+
+Written beside the parameter table (its companion, ``NAME.report.json`` and ``NAME.report.md``) and,
+with ``--report DIR``, with plots and the per-iteration table.  It carries: provenance (software
+version, date, recording hash), the table in natural units with sigma, the noise model (measured in
+the raw data, given, fitted) in ARW/VRW units, every warning, every consistency check, the solver's
+status (Ipopt status and iterations, the post-solve steps), the most correlated parameter pairs and
+the base motion found.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import io
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import __version__
+from . import parameters as P
+from .noise import SensorNoise, natural_noise_frame
+from .report import markdown_table, natural_sigma
+from .units import ARCSEC, DEG, UG
+
+
+def recording_hash(rec) -> str | None:
+    """SHA-256 over the recording's TOML and data files (None for a recording made in memory)."""
+    if rec.source is None:
+        return None
+    digest = hashlib.sha256()
+    paths = [Path(rec.source)]
+    try:
+        import tomllib
+
+        data = tomllib.loads(paths[0].read_text(encoding="utf-8")).get("data")
+        if data:
+            paths.append(paths[0].parent / data)
+        for path in paths:
+            with open(path, "rb") as handle:
+                for block in iter(lambda: handle.read(1 << 20), b""):
+                    digest.update(block)
+    except (OSError, ValueError):
+        return None
+    return digest.hexdigest()
+
+
+def natural_value(name: str, value: float) -> tuple[float, str]:
+    """A parameter's value in the unit an engineer reads (ug, deg/h, arcsec, arcsec/pulse; accel scale SI)."""
+    if name.startswith("accel_bias"):
+        return value / UG, "ug"
+    if name.startswith("gyro_bias"):
+        return value / (DEG / 3600.0), "deg/h"
+    if name.startswith("gyro_scale"):
+        return value / ARCSEC, "arcsec/pulse"
+    if name.startswith("accel_scale"):
+        return value, "m/s/pulse"
+    return value / ARCSEC, "arcsec"
+
+
+def parameter_rows(params: P.ParameterSet, truth: P.ParameterSet | None = None) -> list[dict]:
+    sigma = natural_sigma(params)
+    rows = []
+    for i, name in enumerate(P.NAMES):
+        value, unit = natural_value(name, params.values[i])
+        row = {"parameter": name, "unit": P.UNITS[i], "value": float(params.values[i]),
+               "sigma": None if params.sigma is None else float(params.sigma[i]),
+               "value_natural": value, "value_unit": unit, "sigma_natural": float(sigma[i]),
+               "sigma_unit": P.NATURAL_UNITS[i]}
+        if truth is not None:
+            err = float(P.natural_errors(params.values, truth.values)[i])
+            row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
+        rows.append(row)
+    return rows
+
+
+def strongest_correlations(params: P.ParameterSet, count: int = 6) -> list[dict]:
+    """The most correlated parameter pairs (the weakly separated directions of the schedule)."""
+    if params.covariance is None:
+        return []
+    sd = np.sqrt(np.diag(params.covariance))
+    corr = params.covariance / np.outer(sd, sd)
+    pairs = [(abs(corr[i, j]), i, j) for i in range(P.N_PARAMS) for j in range(i + 1, P.N_PARAMS)]
+    pairs.sort(reverse=True)
+    return [{"a": P.NAMES[i], "b": P.NAMES[j], "correlation": float(corr[i, j])} for _, i, j in pairs[:count]]
+
+
+def _noise_dict(noise: SensorNoise | None) -> dict | None:
+    if noise is None:
+        return None
+    out = {}
+    for key, value in noise.complete().natural().items():
+        out[key] = value.tolist() if isinstance(value, np.ndarray) else float(value)
+    out["unmodelled_acceleration_ug"] = noise.unmodelled_acceleration / UG
+    out["unmodelled_rate_deg_h"] = noise.unmodelled_rate / (DEG / 3600.0)
+    return out
+
+
+def report_data(result, rec, truth: P.ParameterSet | None = None, command: str | None = None) -> dict:
+    """Everything of the report as plain data (the JSON file)."""
+    info = result.info
+    raw = info.get("noise_raw")
+    checks = [c.as_dict() if hasattr(c, "as_dict") else c for c in info.get("checks", [])]
+    motion = info.get("base_motion") or []
+    data = {
+        "format": "casadi-sins-report/1",
+        "software": f"casadi-sins {__version__}",
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": command,
+        "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
+                      "sha256": recording_hash(rec), "samples": int(len(rec.time)), "rate_hz": rec.rate_hz,
+                      "groups": len(rec.group_ids), "segments": len(rec.segments),
+                      "latitude_deg": math.degrees(rec.site.latitude), "gravity_mps2": rec.site.g},
+        "solver": result.solver,
+        "converged": bool(result.converged),
+        "iterations": int(result.iterations),
+        "wall_time_s": float(result.wall_time),
+        "sigma_meaning": result.sigma_meaning,
+        "warnings": list(info.get("warnings", [])),
+        "checks": checks,
+        "variance_factor": float(info.get("variance_factor", 1.0)),
+        "parameters": parameter_rows(result.parameters, truth),
+        "strongest_correlations": strongest_correlations(result.parameters),
+        "noise": {"model": _noise_dict(info.get("noise_model")), "fitted": _noise_dict(info.get("noise_fitted")),
+                  "raw": _noise_dict(raw.model().merged(raw.upper_bounds()) if raw is not None else None),
+                  "raw_determined": ({s: [t.determined for t in raw.white[s]] for s in raw.white}
+                                     if raw is not None else None),
+                  "sources": info.get("noise_sources")},
+        "base_motion": [{"segment": m.segment, "amplitude_arcsec": m.amplitude_arcsec,
+                         "period_s": None if not np.isfinite(m.period_s) else m.period_s,
+                         "significant": m.significant} for m in motion],
+    }
+    if result.solver == "nlp":
+        data["ipopt"] = {"status": info.get("ipopt_status"), "iterations": info.get("ipopt_iterations")}
+        data["post_solve_steps_sigma"] = [float(s) for s in info.get("gls_steps", [])]
+        data["rotation_steps_used"] = bool(info.get("rotation_steps_used", True))
+        data["start_offsets_arcsec"] = {str(g): [float(x) for x in v]
+                                        for g, v in info.get("start_offsets_arcsec", {}).items()}
+    else:
+        data["equations"] = info.get("equations")
+    return data
+
+
+def report_markdown(data: dict) -> str:
+    """The report as Markdown."""
+    rec = data["recording"]
+    lines = [f"# Calibration report: {rec['name']} ({data['solver']})", "",
+             f"- software: {data['software']}, created {data['created']}",
+             f"- recording: {rec['source'] or '(in memory)'}, sha256 `{rec['sha256']}`",
+             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
+             f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
+    if data.get("command"):
+        lines.append(f"- command: `{data['command']}`")
+    status = "converged" if data["converged"] else "NOT converged"
+    if data["solver"] == "nlp":
+        ip = data["ipopt"]
+        lines.append(f"- solver: NLP, Ipopt {ip['status']} after {ip['iterations']} iterations; generalised least "
+                     "squares steps " + ", ".join(f"{s:.3g}" for s in data["post_solve_steps_sigma"]) + " sigma; "
+                     f"velocity steps across rotations {'used' if data['rotation_steps_used'] else 'NOT used'}")
+    else:
+        lines.append(f"- solver: ILS (the paper's), {data['iterations']} iterations, {data['equations']} equations, "
+                     f"{status}")
+    lines.append(f"- wall time {data['wall_time_s']:.2f} s; sigma: {data['sigma_meaning']}")
+    lines += ["", "## Warnings", ""]
+    lines += [f"- **{w}**" for w in data["warnings"]] or ["- none"]
+    lines += ["", "## Parameters", ""]
+    frame = pd.DataFrame(data["parameters"])
+    cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
+    cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
+    lines.append(markdown_table(frame[cols], "%.6g"))
+    lines += ["", "SI values (the table to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
+              "## Noise", ""]
+    noise = data["noise"]
+    models = {k: SensorNoise.from_natural(v) for k, v in (("raw data", noise["raw"]), ("in the model", noise["model"]),
+                                                          ("implied by the fit", noise["fitted"])) if v}
+    if models:
+        lines.append(markdown_table(natural_noise_frame(models), "%.4g"))
+        if noise.get("sources"):
+            lines += ["", "Where each term of the model comes from: "
+                      + ", ".join(f"{k} {v}" for k, v in noise["sources"].items()) + "."]
+        model = noise["model"]
+        if model and (model["unmodelled_acceleration_ug"] or model["unmodelled_rate_deg_h"]):
+            lines += ["", f"Errors outside the model, added to it: {model['unmodelled_acceleration_ug']:.3g} ug "
+                      f"per static segment, {model['unmodelled_rate_deg_h']:.3g} deg/h per static gyro mean."]
+    lines += ["", "## Checks", ""]
+    if data["checks"]:
+        lines.append(markdown_table(pd.DataFrame(data["checks"])[["name", "value", "limit", "passed", "detail"]],
+                                    "%.4g"))
+    lines.append(f"\nVariance factor applied to the covariance: {data['variance_factor']:.4g}")
+    if data["strongest_correlations"]:
+        lines += ["", "## Most correlated parameters", "",
+                  markdown_table(pd.DataFrame(data["strongest_correlations"]), "%+.3f")]
+    moving = [m for m in data["base_motion"] if m["significant"]]
+    if moving:
+        lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
+    return "\n".join(lines) + "\n"
+
+
+def residual_plot(result, rec) -> bytes:
+    """Velocity in every static interval after calibration (mm/s), E/N/U, intervals side by side (PNG)."""
+    from .compare import plot_residuals, static_residuals
+
+    buffer = io.BytesIO()
+    plot_residuals(rec, {result.solver: static_residuals(rec, result)}, buffer)
+    return buffer.getvalue()
+
+
+def noise_plot(result, rec) -> bytes | None:
+    """Allan deviation of the static segments' rates against the noise model's white terms (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .noise import allan_deviation
+    from .report import save_figure
+    from .strapdown import compensated_increments
+
+    model = result.info.get("noise_model")
+    if model is None:
+        return None
+    dth, dvs = [], []
+    for seg in rec.static_segments:
+        dth_seg, dv_seg = compensated_increments(rec, result.parameters.values, rec.segment_samples(seg))
+        dth.append(dth_seg / rec.dt)
+        dvs.append(dv_seg / rec.dt)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
+    for ax, rates, white, unit, scale, label in (
+            (axes[0], dth, model.gyro_arw, "deg/h", DEG / 3600.0, "gyro"),
+            (axes[1], dvs, model.accel_vrw, "ug", UG, "accelerometer")):
+        tau, adev = allan_deviation(rates, rec.dt)
+        for axis in range(3):
+            ax.loglog(tau, adev[:, axis] / scale, "o-", ms=3, lw=0.8, label=f"{label} {'xyz'[axis]}")
+        ax.loglog(tau, np.mean(white) / np.sqrt(tau) / scale, "k--", lw=1, label="white noise of the model")
+        ax.set_xlabel("cluster time (s)")
+        ax.set_ylabel(f"Allan deviation ({unit})")
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"{rec.name}: Allan deviation of the static segments (calibrated), and the noise model")
+    buffer = io.BytesIO()
+    save_figure(fig, buffer)
+    return buffer.getvalue()
+
+
+def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
+    """``NAME.report.json`` and ``NAME.report.md`` beside a parameter table ``NAME.csv``."""
+    table_path = Path(table_path)
+    stem = table_path.with_suffix("")
+    return stem.with_name(stem.name + ".report.json"), stem.with_name(stem.name + ".report.md")
+
+
+def report_files(result, rec, table_path: str | Path, report_dir: str | Path | None = None,
+                 truth: P.ParameterSet | None = None, command: str | None = None) -> dict[Path, bytes]:
+    """Every file of a calibration's report, as ``{path: content}`` (written together by the caller)."""
+    from .report import frame_files
+
+    data = report_data(result, rec, truth, command)
+    json_path, md_path = companion_paths(table_path)
+    text = report_markdown(data)
+    files = {json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
+             md_path: text.encode()}
+    if report_dir is not None:
+        out = Path(report_dir)
+        stem = f"{_safe(rec.name)}-{result.solver}"
+        files[out / f"{stem}-report.md"] = text.encode()
+        files[out / f"{stem}-report.json"] = files[json_path]
+        from .report import parameter_report
+
+        files.update(frame_files(result.history_frame(truth), out / f"{stem}-iterations",
+                                 f"{rec.name}: {result.solver} per iteration (errors in natural units)", "%.8g"))
+        files.update(frame_files(parameter_report(result, truth), out / f"{stem}-parameters",
+                                 f"{rec.name}: {result.solver} calibration ({result.iterations} iterations, "
+                                 f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g"))
+        files[out / f"{stem}-residuals.png"] = residual_plot(result, rec)
+        allan = noise_plot(result, rec)
+        if allan is not None:
+            files[out / f"{stem}-allan.png"] = allan
+    return files
+
+
+def _safe(name: str) -> str:
+    """A recording name as a file name: no folders, nothing but letters, digits, ``-_.``."""
+    cleaned = "".join(c if c.isalnum() or c in "-_." else "-" for c in Path(str(name)).name)
+    return cleaned.strip(".") or "recording"
+
+
+def _json_default(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    return str(value)

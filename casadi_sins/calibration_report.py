@@ -49,7 +49,8 @@ def recording_hash(rec) -> str | None:
 
 
 def natural_value(name: str, value: float) -> tuple[float, str]:
-    """A parameter's value in the unit an engineer reads (ug, deg/h, arcsec, arcsec/pulse; accel scale SI)."""
+    """A parameter's value in the unit an engineer reads (ug, deg/h, arcsec, arcsec/pulse, the extras'
+    natural units; accelerometer scale factors in SI)."""
     if name.startswith("accel_bias"):
         return value / UG, "ug"
     if name.startswith("gyro_bias"):
@@ -58,20 +59,24 @@ def natural_value(name: str, value: float) -> tuple[float, str]:
         return value / ARCSEC, "arcsec/pulse"
     if name.startswith("accel_scale"):
         return value, "m/s/pulse"
+    group = P.extra_group_of(name)
+    if group is not None:
+        return value / group.natural_scale, group.natural_unit
     return value / ARCSEC, "arcsec"
 
 
 def parameter_rows(params: P.ParameterSet, truth: P.ParameterSet | None = None) -> list[dict]:
-    sigma = natural_sigma(params)
+    sigma = params.natural_sigma()
+    errors = P.natural_errors(params, truth) if truth is not None else None
     rows = []
-    for i, name in enumerate(P.NAMES):
+    for i, name in enumerate(params.names):
         value, unit = natural_value(name, params.values[i])
-        row = {"parameter": name, "unit": P.UNITS[i], "value": float(params.values[i]),
+        row = {"parameter": name, "unit": P.unit_of(name), "value": float(params.values[i]),
                "sigma": None if params.sigma is None else float(params.sigma[i]),
                "value_natural": value, "value_unit": unit, "sigma_natural": float(sigma[i]),
-               "sigma_unit": P.NATURAL_UNITS[i]}
-        if truth is not None:
-            err = float(P.natural_errors(params.values, truth.values)[i])
+               "sigma_unit": P.natural_unit_of(name)}
+        if errors is not None:
+            err = float(errors[i])
             row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
         rows.append(row)
     return rows
@@ -83,9 +88,10 @@ def strongest_correlations(params: P.ParameterSet, count: int = 6) -> list[dict]
         return []
     sd = np.sqrt(np.diag(params.covariance))
     corr = params.covariance / np.outer(sd, sd)
-    pairs = [(abs(corr[i, j]), i, j) for i in range(P.N_PARAMS) for j in range(i + 1, P.N_PARAMS)]
-    pairs.sort(reverse=True)
-    return [{"a": P.NAMES[i], "b": P.NAMES[j], "correlation": float(corr[i, j])} for _, i, j in pairs[:count]]
+    n = len(params.names)
+    pairs = sorted(((abs(corr[i, j]), i, j) for i in range(n) for j in range(i + 1, n)), reverse=True)
+    return [{"a": params.names[i], "b": params.names[j], "correlation": float(corr[i, j])}
+            for _, i, j in pairs[:count]]
 
 
 def _noise_dict(noise: SensorNoise | None) -> dict | None:
@@ -96,6 +102,7 @@ def _noise_dict(noise: SensorNoise | None) -> dict | None:
         out[key] = value.tolist() if isinstance(value, np.ndarray) else float(value)
     out["unmodelled_acceleration_ug"] = noise.unmodelled_acceleration / UG
     out["unmodelled_rate_deg_h"] = noise.unmodelled_rate / (DEG / 3600.0)
+    out["unmodelled_step_mm_s"] = noise.unmodelled_step * 1e3
     return out
 
 
@@ -181,6 +188,12 @@ def report_markdown(data: dict) -> str:
         if noise.get("sources"):
             lines += ["", "Where each term of the model comes from: "
                       + ", ".join(f"{k} {v}" for k, v in noise["sources"].items()) + "."]
+        sources = noise.get("sources") or {}
+        if sources.get("gyro_bias_instability") == "not modelled" or sources.get("accel_bias_instability") == \
+                "not modelled":
+            lines += ["", "Bias instability is not modelled: no datasheet value was given, and a recording of "
+                      f"{rec['samples'] / rec['rate_hz'] / 60:.0f} min cannot show a drift with a correlation time of "
+                      "minutes. The sigma of the biases excludes it: give the datasheet (`--noise`)."]
         model = noise["model"]
         if model and (model["unmodelled_acceleration_ug"] or model["unmodelled_rate_deg_h"]):
             lines += ["", f"Errors outside the model, added to it: {model['unmodelled_acceleration_ug']:.3g} ug "

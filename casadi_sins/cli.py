@@ -113,7 +113,8 @@ def cmd_calibrate(args) -> int:
     noise = read_noise_spec(args.noise) if args.noise else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
-        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, **options)
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
+                           **options)
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
     warnings = result.info.get("warnings", [])
@@ -358,6 +359,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
                    "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
     p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
+    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
+                   help="parameters: the paper's 21 (default); extended: also accelerometer quadratic scale, lever "
+                   "arms and the gyro/accel time offset; auto: the extra groups the data support (nlp only)")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")

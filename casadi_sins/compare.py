@@ -25,19 +25,30 @@ def static_residuals(rec: Recording, result: CalibrationResult) -> dict[int, tup
 
 
 def comparison_table(results: dict[str, CalibrationResult], truth: P.ParameterSet | None = None) -> pd.DataFrame:
-    """Per parameter: each solver's value and sigma, their difference, and errors against a truth."""
+    """Per parameter: each solver's value and sigma, their difference, and errors against a truth.
+
+    Rows are the union of the solvers' parameters (an extended NLP beside the 21 of the ILS: the ILS's
+    extra rows are empty)."""
     names = list(results)
-    frame = pd.DataFrame({"parameter": P.NAMES, "unit": P.UNITS, "natural unit": P.NATURAL_UNITS})
+    rows = list(dict.fromkeys(n for res in results.values() for n in res.parameters.names))
+    frame = pd.DataFrame({"parameter": rows, "unit": [P.unit_of(n) for n in rows],
+                          "natural unit": [P.natural_unit_of(n) for n in rows]})
+
+    def column(res, values):
+        lookup = dict(zip(res.parameters.names, values))
+        return np.array([lookup.get(n, np.nan) for n in rows])
+
     for name in names:
-        frame[f"{name} value"] = results[name].parameters.values
-        frame[f"{name} sigma (natural)"] = natural_sigma(results[name].parameters)
+        params = results[name].parameters
+        frame[f"{name} value"] = column(results[name], params.values)
+        frame[f"{name} sigma (natural)"] = column(results[name], params.natural_sigma())
     if len(names) == 2:
-        a, b = names
-        frame[f"{a} - {b} (natural)"] = P.natural_errors(results[a].parameters.values, results[b].parameters.values)
+        a, b = (results[n].parameters for n in names)
+        frame[f"{names[0]} - {names[1]} (natural)"] = P.natural_errors(a.aligned(rows), b.aligned(rows), rows)
     if truth is not None:
-        frame["truth"] = truth.values
+        frame["truth"] = truth.aligned(rows)
         for name in names:
-            err = P.natural_errors(results[name].parameters.values, truth.values)
+            err = column(results[name], P.natural_errors(results[name].parameters, truth))
             frame[f"{name} error (natural)"] = err
             frame[f"{name} error/sigma"] = err / frame[f"{name} sigma (natural)"]
     return frame

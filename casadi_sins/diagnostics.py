@@ -127,6 +127,18 @@ def assess(rec, problem, fit: dict, noise_plan) -> Assessment:
         if not passed and factor > max(factors.values()) * 1.2:
             warnings.append(f"group {group} fits {np.sqrt(factor):.3g} times worse than the noise: a disturbance "
                             "in that group (handling, shock)?")
+    # velocity steps across rotations against the static residuals (lever arms, timing offset?)
+    if fit.get("use_rotation_steps"):
+        from .nlp import STEP_CONSISTENCY_LIMIT
+
+        ratio = fit["rotation_step_ratio"]
+        passed = ratio <= STEP_CONSISTENCY_LIMIT
+        model_fails |= not passed
+        checks.append(Check("velocity steps across rotations", ratio, STEP_CONSISTENCY_LIMIT, passed,
+                            "mean square of the whitened residuals after rotations over that of the others"))
+        if not passed:
+            warnings.append(f"the velocity steps across rotations fit {np.sqrt(ratio):.3g} times worse than the "
+                            "static residuals: terms outside the model act during the rotations")
     # the Gauss-Newton steps after Ipopt
     steps = fit["gls_steps"]
     converged = steps[-1] < 0.01

@@ -265,7 +265,7 @@ def solve_equations(a: np.ndarray, b: np.ndarray, covariance: np.ndarray):
 def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_iterations: int = 10,
                   tolerance: float = 0.01, north_quadratic: bool = True, paper_equations: bool = False,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
-                  allow_base_motion: bool = False) -> CalibrationResult:
+                  allow_base_motion: bool = False, model: str = "21") -> CalibrationResult:
     """Calibrate a recording with the paper's iterative least squares.
 
     Parameters
@@ -287,6 +287,10 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
         Datasheet noise terms; the others are measured in the raw data (:func:`noise.plan_noise`).
     allow_base_motion : bool
         Calibrate although the base sways (the result is then unreliable: see below).
+    model : "21"
+        The ILS fits the paper's 21 parameters only: its equations are slopes and curvatures of the
+        static velocity, which do not see the steps across rotations where lever arms and a time
+        offset act; the extra terms need the NLP (``model="extended"`` or ``"auto"``).
 
     Raises
     ------
@@ -297,9 +301,13 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
     """
     from .diagnostics import factor_limit
 
+    if model not in ("21", None, ()):
+        raise CalibrationError("the ILS (the paper's method) fits the 21 parameters only: its slopes and curvatures "
+                               "of the static velocity do not see the velocity steps across rotations where lever "
+                               "arms and a time offset act; use the nlp solver for the extended model")
     t_start = time.perf_counter()
     initial = initial or rough_parameters(rec)
-    params = initial.values.copy()
+    params = initial.core.copy()
     noise_plan = plan_noise(rec, params, noise)
     motion = describe_motion(noise_plan.motions)
     warnings = list(rec.warnings)
@@ -339,7 +347,12 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
     dof = len(b) - P.N_PARAMS
     inflate = 1.0
-    if factor > factor_limit(dof):
+    free = [t for terms in noise_plan.free_terms().values() for t in terms]
+    if free:
+        # white noise the raw data could not show (coarse pulses): the model holds its upper bound, and the
+        # equations' own residual variance scales it (the paper's way: few degrees of freedom, but unbiased)
+        inflate = factor
+    elif factor > factor_limit(dof):
         inflate = factor
         warnings.append(f"the equations' residuals are {np.sqrt(factor):.3g} times the sensor noise ({dof} degrees "
                         f"of freedom): errors outside the model; sigma inflated by {np.sqrt(factor):.3g}")

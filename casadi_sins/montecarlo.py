@@ -26,11 +26,13 @@ PAPER_ACCURACY = {
 }
 
 
-def group_of(index: int) -> str:
-    for label, sl, _ in P.GROUPS:
-        if sl.start <= index < sl.stop:
-            return label
-    raise IndexError(index)
+def group_of(name: str) -> str:
+    """The report group of a parameter: one of :data:`parameters.GROUPS`' labels, or its extra group's."""
+    extra = P.extra_group_of(name)
+    if extra is not None:
+        return extra.label
+    index = P.INDEX[name]
+    return next(label for label, sl, _ in P.GROUPS if sl.start <= index < sl.stop)
 
 
 def datasheet(problem: Problem):
@@ -46,12 +48,13 @@ def datasheet(problem: Problem):
                        accel_bias_tau=dev.accel_bias_tau_s)
 
 
-def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use_datasheet: bool = True
-             ) -> list[dict]:
+def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use_datasheet: bool = True,
+             model: str = "21") -> list[dict]:
     """Simulate one seed and calibrate it with each solver; one row per solver and parameter.
 
     ``use_datasheet`` gives the calibration the problem's bias instability, as an engineer would from
-    the unit's datasheet (the white noise is always measured from the recording).
+    the unit's datasheet (the white noise is always measured from the recording).  ``model`` is the NLP's
+    parameter model (the ILS fits the 21).
     """
     from .simulate import simulate
     from .solvers import calibrate
@@ -61,17 +64,20 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
     noise = datasheet(problem) if use_datasheet else None
     for solver in solvers:
         try:
-            res = calibrate(sim.recording, solver=solver, noise=noise)
+            options = {"model": model} if solver == "nlp" else {}
+            res = calibrate(sim.recording, solver=solver, noise=noise, **options)
         except CalibrationError as exc:
             rows.append({"seed": seed, "solver": solver, "failed": str(exc)})
             continue
-        err = P.natural_errors(res.parameters.values, sim.truth.values)
-        sigma = res.parameters.sigma / P.NATURAL_SCALE
-        sigma[P.SCALE_MASK] /= np.abs(res.parameters.values[P.SCALE_MASK])
-        first = P.natural_errors(res.history[1], sim.truth.values) if len(res.history) > 1 else err
-        for i, name in enumerate(P.NAMES):
-            rows.append({"seed": seed, "solver": solver, "parameter": name, "group": group_of(i),
-                         "unit": P.NATURAL_UNITS[i], "error": err[i], "sigma": sigma[i],
+        params = res.parameters
+        err = P.natural_errors(params, sim.truth)
+        sigma = params.natural_sigma()
+        truth = sim.truth.aligned(params.names)
+        first = (P.natural_errors(np.asarray(res.history[1])[: len(params.names)], truth, params.names)
+                 if len(res.history) > 1 else err)
+        for i, name in enumerate(params.names):
+            rows.append({"seed": seed, "solver": solver, "parameter": name, "group": group_of(name),
+                         "unit": params.natural_units[i], "error": err[i], "sigma": sigma[i],
                          "first_iteration_error": first[i], "iterations": res.iterations,
                          "wall_time": res.wall_time, "warnings": len(res.info.get("warnings", [])),
                          "failed": ""})
@@ -80,7 +86,7 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
 
 def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",), workers: int | None = None,
         progress: Callable[[int, int], None] | None = None, scheduler: str | None = None,
-        use_datasheet: bool = True) -> pd.DataFrame:
+        use_datasheet: bool = True, model: str = "21") -> pd.DataFrame:
     """Run seeds in parallel; rows of :func:`run_seed`.
 
     Parameters
@@ -93,10 +99,10 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
     """
     rows: list[dict] = []
     with _single_threaded_children():
-        return _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet)
+        return _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet, model)
 
 
-def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet) -> pd.DataFrame:
+def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet, model) -> pd.DataFrame:
     if scheduler:
         try:
             from dask.distributed import Client, LocalCluster
@@ -107,7 +113,7 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datash
         cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                                processes=True) if scheduler == "local" else None
         with Client(cluster if cluster is not None else scheduler) as client:
-            futures = [client.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, pure=False)
+            futures = [client.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, model, pure=False)
                        for seed in seeds]
             for k, fut in enumerate(dask_completed(futures), 1):
                 rows += fut.result()
@@ -119,14 +125,14 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datash
     workers = workers or os.cpu_count() or 1
     if workers == 1:
         for k, seed in enumerate(seeds, 1):
-            rows += run_seed(problem, seed, solvers, use_datasheet)
+            rows += run_seed(problem, seed, solvers, use_datasheet, model)
             if progress:
                 progress(k, len(seeds))
         return pd.DataFrame(rows)
     import multiprocessing
 
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_seed, problem, seed, tuple(solvers), use_datasheet) for seed in seeds]
+        futures = [pool.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, model) for seed in seeds]
         for k, fut in enumerate(as_completed(futures), 1):
             rows += fut.result()
             if progress:
@@ -208,7 +214,7 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     beyond = ok.assign(b=np.abs(ok["error"] / ok["sigma"]) > 4.5).groupby(["solver", "parameter"], sort=False)["b"]
     out["beyond_4_5_sigma"] = beyond.sum().to_numpy()
     out["rms_over_sigma"] = out["rms_error"] / out["mean_sigma"]
-    out["floor"] = [NOISE_FLOOR[g][0] for g in out["group"]]
+    out["floor"] = [NOISE_FLOOR[g][0] if g in NOISE_FLOOR else np.nan for g in out["group"]]
     out["rms_over_floor"] = out["rms_error"] / out["floor"]
-    out["paper"] = [PAPER_ACCURACY[g] for g in out["group"]]
+    out["paper"] = [PAPER_ACCURACY[g] if g in PAPER_ACCURACY else np.nan for g in out["group"]]
     return out

@@ -86,6 +86,8 @@ class GroupSteps:
     step_dt: np.ndarray  # (M,) step length, s
     previous_scale: np.ndarray  # (M,) 1 where the previous step has the same length, else 0
     step_segment: np.ndarray  # (M,) static segment number of each step, -1 outside static segments
+    first: np.ndarray  # (M,) first sample of each step (index into the recording)
+    stop: np.ndarray  # (M,) one past the last sample of each step
     observed: np.ndarray  # (K,) indices of steps whose end velocity is observed
     samples_between: np.ndarray  # (K,) samples between consecutive observations (first: since the start)
     after_rotation: np.ndarray  # (K,) True for the first observation after a rotation
@@ -150,6 +152,8 @@ def plan_steps(rec: Recording, group: int, observe_s: float = 1.0, rotation_step
         # step length (a 1 s block after a rotation sample would extrapolate the rotation into rest)
         previous_scale=(lengths == np.concatenate([[lengths[0]], lengths[:-1]])).astype(float),
         step_segment=static_of,
+        first=first,
+        stop=stop,
         observed=observed,
         samples_between=between.astype(float),
         after_rotation=spans_rotation,
@@ -158,14 +162,14 @@ def plan_steps(rec: Recording, group: int, observe_s: float = 1.0, rotation_step
     )
 
 
-def natural_scale(reference: np.ndarray) -> np.ndarray:
+def natural_scale(reference: np.ndarray, names=P.NAMES) -> np.ndarray:
     """``d(parameters)/d(natural-unit variables)``: ppm of the value for scale factors, else the natural unit."""
-    return np.where(P.SCALE_MASK, reference * 1e-6, P.NATURAL_SCALE)
+    return np.where(P.scale_mask_of(names), reference * 1e-6, P.natural_scale_of(names))
 
 
-def natural_to_parameters(z, reference: np.ndarray):
+def natural_to_parameters(z, reference: np.ndarray, names=P.NAMES):
     """Parameters (SI) from natural-unit deviations ``z`` from ``reference`` (CasADi or NumPy)."""
-    scale = natural_scale(reference)
+    scale = natural_scale(reference, names)
     if isinstance(z, (ca.MX, ca.SX)):
         return ca.DM(reference) + ca.diag(ca.DM(scale)) @ z
     return reference + scale * np.asarray(z)
@@ -196,6 +200,11 @@ class Problem:
     start_attitudes: dict[int, np.ndarray]
     build_time: float
     residual_index: list[tuple]  # (group, kind label, observation/segment, axis) per row
+    names: tuple[str, ...] = P.NAMES  # the parameters, in the order of the first variables
+
+    def variable_names(self) -> list[str]:
+        return list(self.names) + [f"start attitude of group {p.group} ({axis})" for p in self.groups
+                                   for axis in "ENU"]
 
     def tracks(self, trajectory: np.ndarray, use_rotation_steps: bool, motions=None) -> list[GroupTrack]:
         """The noise model's view of the groups, along the navigated attitude ``trajectory``."""
@@ -239,13 +248,23 @@ def _quat_to_dcm_batch(quats: np.ndarray) -> np.ndarray:
 
 
 def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
-                  rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None) -> Problem:
-    """Build the symbolic NLP for a recording around ``reference`` parameters."""
+                  rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
+                  names: tuple[str, ...] = P.NAMES) -> Problem:
+    """Build the symbolic NLP for a recording around ``reference`` parameters (ordered like ``names``: the
+    21, then any extra groups of :data:`parameters.EXTRA_GROUPS`)."""
+    from .extended import correction_expr, sample_regressors, static_rates, step_regressors
+
     t0 = time.perf_counter()
     groups = rec.group_ids
-    n_var = P.N_PARAMS + 3 * len(groups)
+    n_params = len(names)
+    n_var = n_params + 3 * len(groups)
     w = ca.MX.sym("w", n_var)
-    params = natural_to_parameters(w[: P.N_PARAMS], reference)
+    all_params = natural_to_parameters(w[:n_params], reference, names)
+    params = all_params[: P.N_PARAMS]
+    extended = n_params > P.N_PARAMS
+    if extended:
+        per_sample, boundary = sample_regressors(rec.gyro, rec.accel, reference, rec.dt,
+                                                 static_rates(rec, reference))
     earth_dt, gravity_dt = navigation_constants(rec)
     parts, trajectories = [], []
     kind, row_group, row_segment, after, samples, first, index = [], [], [], [], [], [], []
@@ -257,8 +276,12 @@ def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
         starts[group] = start
         steps = len(plan.step_dt)
         dt_row = ca.DM(plan.step_dt).T
-        dtheta, dv = P.compensate_expr(ca.DM(plan.pulses_gyro), ca.DM(plan.pulses_accel), params, dt_row)
-        rotvec = w[P.N_PARAMS + 3 * gi: P.N_PARAMS + 3 * gi + 3] * ARCSEC
+        correction = (correction_expr(all_params[P.N_PARAMS:], names[P.N_PARAMS:],
+                                      ca.DM(step_regressors(per_sample, boundary, plan.first, plan.stop)))
+                      if extended else None)
+        dtheta, dv = P.compensate_expr(ca.DM(plan.pulses_gyro), ca.DM(plan.pulses_accel), params, dt_row,
+                                       correction)
+        rotvec = w[n_params + 3 * gi: n_params + 3 * gi + 3] * ARCSEC
         q0 = quat_multiply(quat_from_rotvec(rotvec), ca.DM(dcm_to_quat(start)))
         x0 = ca.vertcat(q0, ca.DM.zeros(3), dtheta[:, 0], dv[:, 0])
         chain = step_function().mapaccum("strapdown_chain", steps)
@@ -309,7 +332,7 @@ def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
     trajectory = ca.Function("trajectory", [w], [ca.horzcat(*trajectories)])
     return Problem(residuals, jacobian, trajectory, n_var, r.shape[0], np.array(kind), np.array(row_group),
                    np.array(row_segment), np.array(after), np.array(samples), np.array(first), all_events,
-                   plans, reference, starts, time.perf_counter() - t0, index)
+                   plans, reference, starts, time.perf_counter() - t0, index, tuple(names))
 
 
 def quick_weights(problem: Problem, noise: SensorNoise, dt: float, use_rotation_steps: bool,
@@ -399,18 +422,34 @@ def default_observation_spacing(rec: Recording) -> float:
 default_static_block = default_observation_spacing  # the name used before observation and step were separate
 
 
+#: Parameter models of :func:`calibrate_nlp`: the paper's 21, every extra group, or those the data support.
+MODEL_CHOICES = ("21", "extended", "auto")
+
+
+def model_groups(model) -> tuple[str, ...]:
+    """The extra groups a model argument asks for (``"auto"``: all of them, to be selected)."""
+    if model in ("21", None):
+        return ()
+    if model in ("extended", "auto"):
+        return P.MODELS["extended"]
+    groups = tuple(model)
+    P.model_names(groups)  # names unknown groups
+    return groups
+
+
 def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian: str = "gauss-newton",
                   static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
                   use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int = 100,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
-                  static_step_s: float | None = None) -> CalibrationResult:
+                  static_step_s: float | None = None, model="21") -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
 
     Parameters
     ----------
     rec : Recording
     initial : ParameterSet, optional
-        Starting values and reference of the natural-unit variables; default the rough values.
+        Starting values and reference of the natural-unit variables; default the rough values (extra
+        terms: their prior, 0).
     hessian : {"gauss-newton", "exact", "limited-memory"}
         Hessian of Ipopt's stage.
     static_block_s : float, optional
@@ -422,7 +461,7 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     use_rotation_steps : bool or "auto"
         Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
         static residuals (F-test, :data:`STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets of a
-        real unit make velocity steps that the 21 parameters cannot explain.
+        real unit make velocity steps that the model cannot explain.
     tolerance : float
         Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
     noise : SensorNoise, optional
@@ -430,6 +469,11 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     static_step_s : float, optional
         Navigation step in static segments (default: the observation spacing; on a swaying base
         :data:`SWAY_STATIC_STEP_S`).
+    model : {"21", "extended", "auto"} or tuple of group keys
+        The parameters: the paper's 21; with every extra group of :data:`parameters.EXTRA_GROUPS`
+        (quadratic scale, lever arms, time offset); or ``"auto"``: the extra groups the data support
+        (each group's Wald statistic in the extended fit against the Bayesian information criterion,
+        ``k ln n``), refitted with those alone.  Terms not estimated stay at their prior (0).
 
     Raises
     ------
@@ -441,25 +485,67 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     t_start = time.perf_counter()
     observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
-    reference = initial.values.copy()
+    groups = model_groups(model)
+    names = P.model_names(groups)
+    reference = initial.aligned(names)
     noise_plan = plan_noise(rec, reference, noise)
     swaying = describe_motion(noise_plan.motions)
     if static_step_s is None:
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
-    problem = build_problem(rec, reference, observe_s, rotation_step_s, static_step_s)
-    if progress:
-        progress(f"nlp: graph of {sum(len(p.step_dt) for p in problem.groups)} steps, {problem.n_variables} "
-                 f"variables, {problem.n_residuals} residuals built in {problem.build_time:.2f} s")
-        if swaying:
-            progress(f"nlp: {swaying}; static segments stepped at {static_step_s:g} s")
-    modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
     warnings = list(rec.warnings)
+
+    def build(names_):
+        problem_ = build_problem(rec, initial.aligned(names_), observe_s, rotation_step_s, static_step_s, names_)
+        if progress:
+            progress(f"nlp: graph of {sum(len(p.step_dt) for p in problem_.groups)} steps, {problem_.n_variables} "
+                     f"variables ({len(names_)} parameters), {problem_.n_residuals} residuals built in "
+                     f"{problem_.build_time:.2f} s")
+        return problem_
+
+    problem = build(names)
+    while len(problem.names) > P.N_PARAMS:  # extra groups the schedule cannot see are left at their prior
+        dropped = unobservable_group(problem, quick_weights(problem, noise_plan.model, rec.dt, True,
+                                                            noise_plan.motions))
+        if dropped is None:
+            break
+        key, partners = dropped
+        groups = tuple(g for g in groups if g != key)
+        message = (f"{P.EXTRA_GROUPS[key].label} ({key}) is not observable from this schedule (one with "
+                   f"{', '.join(partners)}): left at {P.EXTRA_GROUPS[key].prior:g}")
+        warnings.append(message)
+        if progress:
+            progress(f"nlp: {message}")
+        problem = build(P.model_names(groups))
+    if progress and swaying:
+        progress(f"nlp: {swaying}; static segments stepped at {static_step_s:g} s")
+    modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
+    selection = None
     for mode in modes:
+        if not mode:  # without the steps across rotations only the quadratic scale remains observable
+            kept = tuple(g for g in P.groups_in(problem.names) if g == "quadratic")
+            if P.model_names(kept) != problem.names:
+                left = [g for g in P.groups_in(problem.names) if g != "quadratic"]
+                warnings.append(f"without the steps across rotations {', '.join(left)} cannot be seen: left at 0")
+                problem = build(P.model_names(kept))
         fit = _fit(rec, problem, noise_plan, mode, hessian, tolerance, max_iterations, progress)
-        if mode and len(modes) > 1 and fit["rotation_step_ratio"] > STEP_CONSISTENCY_LIMIT:
+        if model == "auto" and len(problem.names) > P.N_PARAMS:
+            selection = select_groups(problem, fit)
+            chosen = tuple(g for g in groups if selection.get(g, {}).get("selected"))
+            if progress:
+                progress("nlp: model selection: " + ", ".join(
+                    f"{g} {v['statistic']:.3g} (threshold {v['threshold']:.3g}) "
+                    f"{'kept' if v['selected'] else 'left at 0'}" for g, v in selection.items()))
+            if P.model_names(chosen) != problem.names:
+                problem = build(P.model_names(chosen))
+                fit = _fit(rec, problem, noise_plan, mode, hessian, tolerance, max_iterations, progress)
+        # steps that the model cannot explain: a 21-parameter fit of a unit with lever arms or a time offset
+        # would take them for sensor errors; a model with those terms keeps the steps (any misfit left is an
+        # unmodelled error, below)
+        sees_steps = {"lever", "timing"} <= set(P.groups_in(problem.names))
+        if mode and len(modes) > 1 and not sees_steps and fit["rotation_step_ratio"] > STEP_CONSISTENCY_LIMIT:
             message = (f"the velocity steps across rotations are {np.sqrt(fit['rotation_step_ratio']):.3g} times "
-                       "noisier than the static residuals: not explained by the 21-parameter model (lever arms, "
-                       "timing offset?); refitted without them")
+                       f"noisier than the static residuals: not explained by the {_model_label(problem.names)} "
+                       "(lever arms, timing offset?); refitted without them")
             if progress:
                 progress(f"nlp: {message}")
             warnings.append(message)
@@ -472,35 +558,42 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
     if assessment.model_fails:
         # errors outside the model: give them a place in it (unmodelled acceleration per static segment,
         # unmodelled rate per gyro mean), with variances from the residuals, and solve again
-        model = estimate_unmodelled(problem, fit, noise_plan)
+        unmodelled = estimate_unmodelled(problem, fit, noise_plan)
         if progress:
             progress(f"nlp: residuals exceed the noise model: unmodelled acceleration "
-                     f"{model.unmodelled_acceleration / UG:.3g} ug per static segment, unmodelled rate "
-                     f"{model.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean added")
+                     f"{unmodelled.unmodelled_acceleration / UG:.3g} ug per static segment, unmodelled rate "
+                     f"{unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean, unmodelled step "
+                     f"{unmodelled.unmodelled_step * 1e3:.3g} mm/s per rotation added")
         stats = fit["stats"]
-        fit = _gls(rec, problem, noise_plan, model, fit["z"], fit["use_rotation_steps"], progress, update_free=False)
+        fit = _gls(rec, problem, noise_plan, unmodelled, fit["z"], fit["use_rotation_steps"], progress,
+                   update_free=False)
         fit["stats"] = stats
         first_warnings = assessment.warnings
         assessment = assess(rec, problem, fit, noise_plan)
         warnings += [f"{w.split(';')[0]}" for w in first_warnings]
-        warnings.append(f"errors outside the model were added to it: {model.unmodelled_acceleration / UG:.3g} ug "
-                        f"unmodelled acceleration per static segment, {model.unmodelled_rate / DEG_PER_H:.3g} "
-                        "deg/h per static gyro mean; sigma includes them")
+        step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
+                if fit["use_rotation_steps"] else "")
+        warnings.append(f"errors outside the model were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} "
+                        f"ug unmodelled acceleration per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} "
+                        f"deg/h per static gyro mean{step}; sigma includes them")
     warnings += assessment.warnings
     covariance_w = fit["covariance_natural"] * assessment.variance_factor
     z = fit["z"]
-    values = natural_to_parameters(z[: P.N_PARAMS], reference)
-    scale = natural_scale(reference)
-    covariance = covariance_w[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
-    start_offsets = {g: z[P.N_PARAMS + 3 * i: P.N_PARAMS + 3 * i + 3] for i, g in enumerate(rec.group_ids)}
+    names = problem.names
+    n_params = len(names)
+    reference = problem.reference
+    values = natural_to_parameters(z[:n_params], reference, names)
+    scale = natural_scale(reference, names)
+    covariance = covariance_w[:n_params, :n_params] * np.outer(scale, scale)
+    start_offsets = {g: z[n_params + 3 * i: n_params + 3 * i + 3] for i, g in enumerate(rec.group_ids)}
     start_attitudes = {g: small_rotation(start_offsets[g] * ARCSEC) @ problem.start_attitudes[g]
                        for g in rec.group_ids}
-    model = fit["noise"]
-    per_sample = {"accel_noise_ug": float(np.mean(model.accel_vrw)) / np.sqrt(rec.dt) / UG,
-                  "gyro_noise_deg_h": float(np.mean(model.gyro_arw)) / np.sqrt(rec.dt) / DEG_PER_H,
-                  "velocity_white_mps": float(np.sqrt(np.mean(model.accel_quantization**2)))}
+    noise_model = fit["noise"]
+    per_sample = {"accel_noise_ug": float(np.mean(noise_model.accel_vrw)) / np.sqrt(rec.dt) / UG,
+                  "gyro_noise_deg_h": float(np.mean(noise_model.gyro_arw)) / np.sqrt(rec.dt) / DEG_PER_H,
+                  "velocity_white_mps": float(np.sqrt(np.mean(noise_model.accel_quantization**2)))}
     if progress:
-        nat = model.natural()
+        nat = noise_model.natural()
         progress(f"nlp: noise model: ARW {_fmt(nat['gyro_arw_deg_rth'])} deg/sqrt(h) ({noise_plan.source['gyro_arw']}), "
                  f"VRW {_fmt(nat['accel_vrw_ug_rthz'])} ug/sqrt(Hz) ({noise_plan.source['accel_vrw']}); variance "
                  f"factors velocity {assessment.factors['velocity']:.3g}, gyro {assessment.factors['gyro']:.3g}")
@@ -514,13 +607,57 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
             "start_attitudes": start_attitudes, "residual_vector": fit["whitened_residuals"],
             "residual_index": problem.residual_index, "residual_kind": problem.kind, "plans": problem.groups,
             "problem": problem, "covariance_natural": covariance_w, "hessian": hessian, "gls_steps": fit["gls_steps"],
-            "noise_model": model, "noise_raw": noise_plan.raw, "noise_sources": dict(noise_plan.source),
+            "noise_model": noise_model, "noise_raw": noise_plan.raw, "noise_sources": dict(noise_plan.source),
             "noise_fitted": assessment.fitted_noise, "base_motion": noise_plan.motions,
-            "static_step_s": static_step_s, "observe_s": observe_s, **per_sample}
-    return CalibrationResult("nlp", P.ParameterSet(values, covariance=covariance), initial,
+            "static_step_s": static_step_s, "observe_s": observe_s, "model": P.groups_in(names),
+            "model_selection": selection, **per_sample}
+    return CalibrationResult("nlp", P.ParameterSet(values, covariance=covariance, names=names), initial,
                              [reference, values], int(fit["stats"]["iter_count"]), True,
                              float(np.sqrt(np.mean(fit["whitened_residuals"] ** 2))), time.perf_counter() - t_start,
                              SIGMA_MEANING, info)
+
+
+#: Extra groups dropped first when the schedule cannot separate them (the weakest-seen first).
+DROP_ORDER = ("lever_along", "lever", "timing", "quadratic")
+
+
+def unobservable_group(problem: Problem, weights) -> tuple[str, list[str]] | None:
+    """The extra group to leave out when the Jacobian at the reference is rank deficient, with the
+    variables it is confounded with; ``None`` when every variable is observable."""
+    jac = weights @ np.asarray(problem.jacobian(np.zeros(problem.n_variables))[1])
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    null = s < RANK_TOLERANCE * s[0]
+    if not null.any():
+        return None
+    involved = np.abs(vt[null]).max(axis=0) > 0.1
+    names = problem.variable_names()
+    present = P.groups_in([n for n, i in zip(names, involved) if i])
+    for key in DROP_ORDER:
+        if key in present:
+            members = set(P.EXTRA_GROUPS[key].names)
+            return key, [n for n, i in zip(names, involved) if i and n not in members]
+    return None
+
+
+def _model_label(names) -> str:
+    extras = P.groups_in(names)
+    return "21-parameter model" if not extras else f"model (21 + {', '.join(extras)})"
+
+
+def select_groups(problem: Problem, fit: dict) -> dict[str, dict]:
+    """Which extra groups the data support: each group's Wald statistic ``x^T C^-1 x`` (natural units, from
+    the fit with every group) against the Bayesian information criterion ``k ln n``."""
+    out = {}
+    n = problem.n_residuals
+    for key in P.groups_in(problem.names):
+        idx = [problem.names.index(name) for name in P.EXTRA_GROUPS[key].names]
+        x = fit["z"][idx]
+        cov = fit["covariance_natural"][np.ix_(idx, idx)]
+        statistic = float(x @ np.linalg.solve(cov, x))
+        threshold = len(idx) * float(np.log(n))
+        out[key] = {"statistic": statistic, "threshold": threshold, "selected": statistic > threshold,
+                    "values_natural": x.tolist()}
+    return out
 
 
 def _fmt(values) -> str:
@@ -533,7 +670,8 @@ def _fit(rec: Recording, problem: Problem, noise_plan: NoisePlan, use_rotation_s
     weights = quick_weights(problem, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
     z, stats = _solve_ipopt(problem, weights, hessian, tolerance, max_iterations, progress)
     if not stats["success"]:
-        _check_rank(np.asarray(problem.jacobian(z)[1]))  # a rank deficiency is the likelier cause: name it
+        # a rank deficiency is the likelier cause: name it
+        _check_rank(np.asarray(problem.jacobian(z)[1]), problem.variable_names())
         raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} "
                                f"after {stats['iter_count']} iterations")
     fit = _gls(rec, problem, noise_plan, dataclasses.replace(noise_plan.model), z, use_rotation_steps, progress)
@@ -554,7 +692,7 @@ def _gls(rec: Recording, problem: Problem, noise_plan: NoisePlan, model: SensorN
                                                 noise_plan.motions), rec.site.g, rec.site.earth_rate)
         white = system.whiten(np.column_stack([r, jac]), model).columns
         rw, jw = white[:, 0], white[:, 1:]
-        _check_rank(jw)
+        _check_rank(jw, problem.variable_names())
         u, s, vt = np.linalg.svd(jw, full_matrices=False)
         step = -vt.T @ ((u.T @ rw) / s)
         sigma = np.sqrt(np.sum((vt.T / s) ** 2, axis=1))
@@ -587,6 +725,7 @@ def _gls(rec: Recording, problem: Problem, noise_plan: NoisePlan, model: SensorN
 #: Search ranges of the unmodelled terms: acceleration (m/s^2), rate (rad/s).
 UNMODELLED_ACCELERATION_RANGE = (1e-8, 1e-2)
 UNMODELLED_RATE_RANGE = (1e-12, 1e-5)
+UNMODELLED_STEP_RANGE = (1e-7, 1.0)
 
 
 def restricted_likelihood(system: NoiseSystem, columns: np.ndarray, model: SensorNoise) -> float:
@@ -642,9 +781,11 @@ def estimate_unmodelled(problem: Problem, fit: dict, noise_plan: NoisePlan) -> S
     gyro = problem.kind == 1
     start_acc = np.sqrt(np.mean(r[problem.kind == 0] ** 2)) / 100.0  # a slope of the residuals' size per 100 s
     start_rate = np.sqrt(np.mean(r[gyro] ** 2)) if gyro.any() else 1e-9
-    return estimate_terms(fit["system"], np.column_stack([r, fit["jacobian"]]), fit["noise"],
-                          {"unmodelled_acceleration": (start_acc, *UNMODELLED_ACCELERATION_RANGE),
-                           "unmodelled_rate": (start_rate, *UNMODELLED_RATE_RANGE)})
+    terms = {"unmodelled_acceleration": (start_acc, *UNMODELLED_ACCELERATION_RANGE),
+             "unmodelled_rate": (start_rate, *UNMODELLED_RATE_RANGE)}
+    if fit["use_rotation_steps"]:
+        terms["unmodelled_step"] = (1e-4, *UNMODELLED_STEP_RANGE)
+    return estimate_terms(fit["system"], np.column_stack([r, fit["jacobian"]]), fit["noise"], terms)
 
 
 def _line_search(problem: Problem, system: NoiseSystem, model: SensorNoise, z: np.ndarray, step: np.ndarray,
@@ -681,7 +822,7 @@ def _estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Nois
     return estimate_terms(system, columns, model, terms)
 
 
-def _check_rank(jac: np.ndarray) -> None:
+def _check_rank(jac: np.ndarray, names: list[str] | None = None) -> None:
     """Raise naming the unobservable variables when the Jacobian is (numerically) rank deficient.
 
     Relative singular values below :data:`RANK_TOLERANCE` count as zero: on the paper's schedule and
@@ -692,10 +833,10 @@ def _check_rank(jac: np.ndarray) -> None:
     null = s < RANK_TOLERANCE * s[0]
     if m <= n or null.any():
         weak = np.abs(vt[null]).max(axis=0) > 0.3 if null.any() else np.ones(n, bool)
-        names = [P.NAMES[i] if i < P.N_PARAMS else f"start attitude of group {(i - P.N_PARAMS) // 3 + 1}"
-                 for i in np.flatnonzero(weak)]
+        names = names or [P.NAMES[i] if i < P.N_PARAMS else f"start attitude of group {(i - P.N_PARAMS) // 3 + 1}"
+                          for i in range(n)]
         raise CalibrationError(f"the residuals do not determine all parameters (condition "
                                f"{s[0] / max(s[-1], 1e-300):.2g}); not observable from this schedule: "
-                               f"{', '.join(names)}")
+                               f"{', '.join(names[i] for i in np.flatnonzero(weak))}")
 
 

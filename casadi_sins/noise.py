@@ -37,7 +37,7 @@ from .units import ARCSEC, DEG, DEG_PER_H, UG
 #: Floors of noise terms the data do not determine (far below any real sensor): ARW (rad/sqrt(s)),
 #: VRW (m/s/sqrt(s)).  They keep noise-free data from giving one kind of residual an absurd weight.
 GYRO_ARW_FLOOR = 1e-6 * DEG / 60.0
-ACCEL_VRW_FLOOR = 0.001 * UG
+ACCEL_VRW_FLOOR = 0.05 * UG
 #: Block sizes (samples) tried by the raw estimate, and the longest block (s).
 BLOCK_SIZES = (1, 2, 4, 8, 16, 32, 64, 128, 256)
 MAX_BLOCK_S = 3.0
@@ -66,6 +66,7 @@ class SensorNoise:
     # errors outside the sensor model, estimated from the fit when its checks fail (kalman module)
     unmodelled_acceleration: float = 0.0  # m/s^2, constant per static segment
     unmodelled_rate: float = 0.0  # rad/s, on each static gyro mean
+    unmodelled_step: float = 0.0  # m/s, on each velocity step across a rotation
 
     FIELDS = ("gyro_arw", "accel_vrw", "gyro_quantization", "accel_quantization")
 
@@ -267,7 +268,10 @@ def _fit_line(m: np.ndarray, v: np.ndarray, count: np.ndarray) -> tuple[np.ndarr
     for free in ([0, 1], [0], [1]):
         a = design[:, free]
         info = a.T @ (a * weights[:, None])
-        coef = np.linalg.solve(info, a.T @ (weights * v))
+        root = np.sqrt(weights)
+        coef = np.linalg.lstsq(a * root[:, None], v * root, rcond=None)[0]
+        if np.linalg.cond(info) > 1e12:
+            info = info + np.eye(len(free)) * 1e-12 * np.trace(info)
         if np.all(coef >= 0):
             out, err = np.zeros(2), np.zeros(2)
             out[free] = coef

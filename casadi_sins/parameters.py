@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 import pandas as pd
 
+from .frames import G0
 from .units import ARCSEC, DEG_PER_H, PPM, TO_SI, UG
 
 NAMES = (
@@ -90,6 +91,90 @@ NATURAL_SCALE = np.array([_natural(n)[1] for n in NAMES])
 SCALE_MASK = np.array(["_scale_" in n for n in NAMES])
 
 
+# --------------------------------------------------------------------------- terms beyond the 21
+@dataclasses.dataclass(frozen=True)
+class ParameterGroup:
+    """A group of optional output-model parameters: names, SI unit, natural unit, prior, meaning.
+
+    Everything that handles parameters (table, reports, solvers, simulator, Monte Carlo) reads the
+    extra rows from here; the 21 of the paper are always first.
+    """
+
+    key: str
+    label: str
+    names: tuple[str, ...]
+    unit: str  # SI, as written in the parameter table
+    natural_unit: str
+    natural_scale: float  # SI per natural unit
+    meaning: str
+    prior: float = 0.0  # value when the group is not estimated
+
+
+EXTRA_GROUPS = {
+    "quadratic": ParameterGroup(
+        "quadratic", "accel quadratic scale", ("accel_quadratic_x", "accel_quadratic_y", "accel_quadratic_z"),
+        "s^2/m", "ug/g^2", 1e-6 / G0,
+        "k2 of each accelerometer: its output is a + k2 a^2 for the sensed specific force a (per axis)"),
+    "lever": ParameterGroup(
+        "lever", "accel lever arms across the sensing axes (size effect)",
+        ("accel_x_lever_y", "accel_x_lever_z", "accel_y_lever_x", "accel_y_lever_z"),
+        "m", "mm", 1e-3,
+        "position of the x and y accelerometers relative to the z accelerometer (the navigation point), "
+        "across their sensing axes; each senses w_dot x p + w x (w x p) along its axis"),
+    "lever_along": ParameterGroup(
+        "lever_along", "accel lever arms along the sensing axes",
+        ("accel_x_lever_x", "accel_y_lever_y"),
+        "m", "mm", 1e-3,
+        "position of the x (y) accelerometer along its own axis: seen only through the centripetal term, "
+        "-(w_y^2 + w_z^2) p_x; single-axis turns make it one with the time offset"),
+    "timing": ParameterGroup(
+        "timing", "gyro/accel time offset", ("accel_time_offset",), "s", "ms", 1e-3,
+        "the accelerometer samples describe the specific force this much later than the gyro samples "
+        "(f -> f - tau w x f)"),
+}
+#: The parameter models: the paper's 21, and with every extra group.
+MODELS = {"21": (), "extended": tuple(EXTRA_GROUPS)}
+EXTRA_NAMES = tuple(n for g in EXTRA_GROUPS.values() for n in g.names)
+ALL_NAMES = NAMES + EXTRA_NAMES
+
+
+def model_names(extras=()) -> tuple[str, ...]:
+    """The 21 names followed by those of the given extra groups (in registry order)."""
+    unknown = set(extras) - set(EXTRA_GROUPS)
+    if unknown:
+        raise ValueError(f"unknown parameter group(s) {', '.join(sorted(unknown))}; known: {', '.join(EXTRA_GROUPS)}")
+    return NAMES + tuple(n for key, g in EXTRA_GROUPS.items() if key in extras for n in g.names)
+
+
+def extra_group_of(name: str) -> ParameterGroup | None:
+    return next((g for g in EXTRA_GROUPS.values() if name in g.names), None)
+
+
+def groups_in(names) -> tuple[str, ...]:
+    """The extra groups present in a list of names."""
+    return tuple(key for key, g in EXTRA_GROUPS.items() if any(n in names for n in g.names))
+
+
+def unit_of(name: str) -> str:
+    group = extra_group_of(name)
+    return group.unit if group else UNITS[INDEX[name]]
+
+
+def natural_unit_of(name: str) -> str:
+    group = extra_group_of(name)
+    return group.natural_unit if group else NATURAL_UNITS[INDEX[name]]
+
+
+def natural_scale_of(names) -> np.ndarray:
+    """SI size of each name's natural unit (scale factors: 1e-6, relative to the value)."""
+    return np.array([extra_group_of(n).natural_scale if extra_group_of(n) else NATURAL_SCALE[INDEX[n]]
+                     for n in names])
+
+
+def scale_mask_of(names) -> np.ndarray:
+    return np.array(["_scale_" in n for n in names])
+
+
 # --------------------------------------------------------------------------- model
 def sensor_matrices(p):
     """``(K_a, S_a, B_a, K_g, S_g, B_g)`` of a parameter vector (CasADi or NumPy, SI).
@@ -98,7 +183,7 @@ def sensor_matrices(p):
     (unit diagonal; ``K_a`` lower triangular; row = sensor axis).
     """
     if not isinstance(p, (ca.SX, ca.MX, ca.DM)):
-        p = ca.DM(np.asarray(p, dtype=float).reshape(N_PARAMS))
+        p = ca.DM(np.asarray(p, dtype=float).ravel()[:N_PARAMS])
 
     def misalignment(entries, offset):
         rows = [[1 if i == j else 0 for j in range(3)] for i in range(3)]
@@ -122,15 +207,18 @@ def output_model_expr(dtheta, dv, p, dt):
     return dn_g, dn_a
 
 
-def compensate_expr(dn_g, dn_a, p, dt):
+def compensate_expr(dn_g, dn_a, p, dt, accel_correction=None):
     """Increments ``(dtheta, dv)`` from raw pulses: the exact inverse of eq. 1.
 
     ``dn_g``, ``dn_a`` may be 3 x n matrices of pulse sums over n intervals with ``dt`` a 1 x n row
     (the model is linear, so summed pulses compensate exactly to summed increments).
+    ``accel_correction`` (3 x n) is added before ``K_a^-1``: the terms beyond the 21
+    (:func:`extended.correction_expr`).
     """
     k_a, s_a, b_a, k_g, s_g, b_g = sensor_matrices(p)
     dtheta = ca.solve(k_g, ca.diag(s_g) @ dn_g - b_g @ dt)
-    dv = ca.solve(k_a, ca.diag(s_a) @ dn_a - b_a @ dt)
+    sensed = ca.diag(s_a) @ dn_a - b_a @ dt
+    dv = ca.solve(k_a, sensed if accel_correction is None else sensed + accel_correction)
     return dtheta, dv
 
 
@@ -162,7 +250,8 @@ def _affine_function(which: str) -> ca.Function:
 
 
 def _apply_rows(which: str, a: np.ndarray, b: np.ndarray, p, dt: float):
-    m_a, c_a, m_b, c_b = (np.asarray(x) for x in _affine_function(which)(np.asarray(p, dtype=float), dt))
+    core = np.asarray(p, dtype=float)[:N_PARAMS]  # the extras act through extended.py, not here
+    m_a, c_a, m_b, c_b = (np.asarray(x) for x in _affine_function(which)(core, dt))
     a = np.atleast_2d(np.asarray(a, dtype=float))
     b = np.atleast_2d(np.asarray(b, dtype=float))
     return a @ m_a.T + c_a.T, b @ m_b.T + c_b.T
@@ -198,22 +287,35 @@ def apply_error_estimate(p: np.ndarray, errors: np.ndarray) -> np.ndarray:
     return p
 
 
-def parameter_errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Errors of an estimate in SI-like form (scale factors relative), ordered like :data:`NAMES`.
+def parameter_errors(estimate: np.ndarray, truth: np.ndarray, names=NAMES) -> np.ndarray:
+    """Errors of an estimate in SI-like form (scale factors relative), ordered like ``names``.
 
-    Biases and misalignments: ``estimate - truth``; scale factors
+    Biases, misalignments and extra terms: ``estimate - truth``; scale factors
     ``estimate/truth - 1`` (the ``t_ii`` of the paper).  Divide by
-    :data:`NATURAL_SCALE` for natural units.
+    :func:`natural_scale_of` for natural units.
     """
     estimate, truth = np.asarray(estimate, float), np.asarray(truth, float)
     err = estimate - truth
-    err[SCALE_MASK] = estimate[SCALE_MASK] / truth[SCALE_MASK] - 1.0
+    mask = scale_mask_of(names)
+    err[mask] = estimate[mask] / truth[mask] - 1.0
     return err
 
 
-def natural_errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """Errors of an estimate in natural units (ug, ppm, arcsec, deg/h)."""
-    return parameter_errors(estimate, truth) / NATURAL_SCALE
+def natural_errors(estimate, truth, names=None) -> np.ndarray:
+    """Errors of an estimate in natural units (ug, ppm, arcsec, deg/h; mm, ms, ug/g^2 for the extras).
+
+    ``estimate`` and ``truth`` may be arrays (ordered like ``names``, default the 21) or
+    :class:`ParameterSet`\ s: then the estimate's names, with the truth's value or the group's prior
+    (0) where the truth lacks a name (a truth file of the 21 against an extended estimate).
+    """
+    if isinstance(estimate, ParameterSet):
+        names = estimate.names
+        truth = truth.aligned(names) if isinstance(truth, ParameterSet) else truth
+        estimate = estimate.values
+    elif isinstance(truth, ParameterSet):
+        truth = truth.aligned(names or NAMES)
+    names = names or NAMES
+    return parameter_errors(estimate, truth, names) / natural_scale_of(names)
 
 
 # --------------------------------------------------------------------------- table
@@ -223,51 +325,93 @@ class ParameterTableError(ValueError):
 
 @dataclasses.dataclass
 class ParameterSet:
-    """Values of the 21 parameters (SI, order of :data:`NAMES`) with optional uncertainty.
+    """Values of the parameters (SI, order of ``names``: the 21 of :data:`NAMES`, then any extra groups)
+    with optional uncertainty.
 
     Attributes
     ----------
-    values : ndarray (21,)
-    sigma : ndarray (21,) or None
+    values : ndarray (n,)
+    sigma : ndarray (n,) or None
         1-sigma uncertainty of each value, SI.
-    covariance : ndarray (21, 21) or None
+    covariance : ndarray (n, n) or None
         Full covariance in SI; when given, ``sigma`` is its diagonal root.
+    names : tuple of str
+        :data:`NAMES` (the paper's model) or :func:`model_names` of some extra groups.
     """
 
     values: np.ndarray
     sigma: np.ndarray | None = None
     covariance: np.ndarray | None = None
+    names: tuple[str, ...] = NAMES
 
     def __post_init__(self):
-        self.values = np.asarray(self.values, dtype=float).reshape(N_PARAMS)
+        self.names = tuple(self.names)
+        n = len(self.names)
+        self.values = np.asarray(self.values, dtype=float).reshape(n)
         if self.covariance is not None:
-            self.covariance = np.asarray(self.covariance, dtype=float).reshape(N_PARAMS, N_PARAMS)
+            self.covariance = np.asarray(self.covariance, dtype=float).reshape(n, n)
             if self.sigma is None:
                 self.sigma = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
         if self.sigma is not None:
-            self.sigma = np.asarray(self.sigma, dtype=float).reshape(N_PARAMS)
+            self.sigma = np.asarray(self.sigma, dtype=float).reshape(n)
 
     def __getitem__(self, name: str) -> float:
-        return float(self.values[INDEX[name]])
+        return float(self.values[self.names.index(name)])
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        return tuple(unit_of(n) for n in self.names)
+
+    @property
+    def natural_units(self) -> tuple[str, ...]:
+        return tuple(natural_unit_of(n) for n in self.names)
+
+    def natural_sigma(self) -> np.ndarray:
+        """1-sigma of each parameter in the natural unit of its error (scale factors relative, ppm)."""
+        if self.sigma is None:
+            return np.full(len(self.names), np.nan)
+        mask = scale_mask_of(self.names)
+        return self.sigma / natural_scale_of(self.names) / np.where(mask, np.abs(self.values), 1.0)
+
+    @property
+    def core(self) -> np.ndarray:
+        """The 21 parameters of the paper's model."""
+        return self.values[:N_PARAMS]
+
+    @property
+    def extras(self) -> tuple[str, ...]:
+        """The extra groups present."""
+        return groups_in(self.names)
+
+    def aligned(self, names) -> np.ndarray:
+        """Values in the order of ``names``; names not present take their group's prior."""
+        lookup = dict(zip(self.names, self.values))
+        return np.array([lookup[n] if n in lookup else extra_group_of(n).prior for n in names])
 
     @classmethod
     def from_dict(cls, values: dict[str, float]) -> "ParameterSet":
+        """From ``{name: SI value}``: all 21, and every name of each extra group that appears."""
         missing = [n for n in NAMES if n not in values]
+        names = model_names(groups_in(values))
+        missing += [n for n in names[N_PARAMS:] if n not in values]
         if missing:
             raise ParameterTableError(f"missing parameters: {', '.join(missing)}")
-        return cls(np.array([values[n] for n in NAMES]))
+        return cls(np.array([values[n] for n in names]), names=names)
 
     def to_frame(self, truth: "ParameterSet | None" = None) -> pd.DataFrame:
         """The parameter table as a DataFrame (``truth`` adds truth and natural-unit error)."""
-        frame = pd.DataFrame({"parameter": NAMES, "unit": UNITS, "value": self.values,
+        names = self.names
+        natural = [natural_unit_of(n) for n in names]
+        frame = pd.DataFrame({"parameter": names, "unit": [unit_of(n) for n in names], "value": self.values,
                               "sigma": self.sigma if self.sigma is not None else np.nan})
+        mask = scale_mask_of(names)
         if self.sigma is not None:
-            frame["sigma_natural"] = self.sigma / NATURAL_SCALE / np.where(SCALE_MASK, np.abs(self.values), 1.0)
-            frame["natural_unit"] = NATURAL_UNITS
+            frame["sigma_natural"] = self.sigma / natural_scale_of(names) / np.where(mask, np.abs(self.values), 1.0)
+            frame["natural_unit"] = natural
         if truth is not None:
-            frame["truth"] = truth.values
-            frame["error_natural"] = natural_errors(self.values, truth.values)
-            frame["natural_unit"] = NATURAL_UNITS
+            frame["truth"] = truth.aligned(names)
+            frame["error_natural"] = natural_errors(self, truth)
+            frame["natural_unit"] = natural
         return frame
 
 
@@ -313,17 +457,16 @@ def read_table(path: str | Path) -> ParameterSet:
     for row, rec in enumerate(frame.itertuples(index=False)):
         line = row + 2
         name = str(rec.parameter).strip()
-        if name not in INDEX:
+        if name not in INDEX and extra_group_of(name) is None:
             raise ParameterTableError(f"{path}, line {line}: unknown parameter {name!r}")
         if name in values:
             raise ParameterTableError(f"{path}, line {line}: parameter {name!r} given twice")
         unit = str(rec.unit).strip()
         if unit not in TO_SI:
             raise ParameterTableError(f"{path}, line {line}: unknown unit {unit!r} for {name}")
-        if TO_SI[unit] != TO_SI[UNITS[INDEX[name]]] and _dimension(unit) != _dimension(UNITS[INDEX[name]]):
-            raise ParameterTableError(
-                f"{path}, line {line}: unit {unit!r} does not fit {name} (expected {UNITS[INDEX[name]]})"
-            )
+        expected = unit_of(name)
+        if TO_SI[unit] != TO_SI[expected] and _dimension(unit) != _dimension(expected):
+            raise ParameterTableError(f"{path}, line {line}: unit {unit!r} does not fit {name} (expected {expected})")
         try:
             value = float(rec.value)
         except (TypeError, ValueError):
@@ -336,11 +479,13 @@ def read_table(path: str | Path) -> ParameterSet:
             sigmas[name] = float(sigma) * TO_SI[unit]
         except (TypeError, ValueError):
             sigmas[name] = np.nan
-    missing = [n for n in NAMES if n not in values]
+    names = model_names(groups_in(values))
+    missing = [n for n in names if n not in values]
     if missing:
         raise ParameterTableError(f"{path}: missing parameters {', '.join(missing)}")
-    sig = np.array([sigmas[n] for n in NAMES])
-    return ParameterSet(np.array([values[n] for n in NAMES]), sigma=None if np.all(np.isnan(sig)) else sig)
+    sig = np.array([sigmas[n] for n in names])
+    return ParameterSet(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig,
+                        names=names)
 
 
 def _dimension(unit: str) -> str:
@@ -350,4 +495,10 @@ def _dimension(unit: str) -> str:
         return "rate"
     if unit.endswith("/pulse"):
         return "m/s/pulse" if unit.startswith("m/s") else "angle/pulse"
+    if unit in ("s^2/m", "ug/g^2"):
+        return "quadratic"
+    if unit in ("m", "mm", "cm"):
+        return "length"
+    if unit in ("s", "ms"):
+        return "time"
     return "angle"

@@ -9,7 +9,8 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
     [[groups]]  start = "NUE", rotations = ["+Z", "+Z", "+Z"], optional angle_deg = 90
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
                 accel_noise_ug, gyro_noise_deg_h, quantize
-    [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}
+    [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}; the 21, and any
+                extra group in full (accel_quadratic_*, accel_x/y_lever_*, accel_time_offset)
 
 Recordings made from it follow ``recording-format.md``; everything about the
 problem that is not in that format (truth, deviations) stays here.
@@ -227,9 +228,9 @@ def load_problem(path: str | Path | None = None) -> Problem:
     truth_doc = section("truth")
     values = {}
     for name, entry in truth_doc.items():
-        if name not in P.INDEX:
+        if name not in P.ALL_NAMES:
             raise ProblemError(f"{path}: [truth] unknown parameter {name!r}")
-        value, unit = (entry.get("value"), entry.get("unit")) if isinstance(entry, dict) else (entry, P.UNITS[P.INDEX[name]])
+        value, unit = (entry.get("value"), entry.get("unit")) if isinstance(entry, dict) else (entry, P.unit_of(name))
         if unit not in TO_SI:
             raise ProblemError(f"{path}: [truth] {name}: unknown unit {unit!r}")
         values[name] = number({"v": value}, "v", f"truth {name}") * TO_SI[unit]

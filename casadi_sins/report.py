@@ -114,21 +114,17 @@ def plot_navigation(rec: Recording, runs: dict[str, list[GroupNavigation]], path
 
 def natural_sigma(params: P.ParameterSet) -> np.ndarray:
     """1-sigma of each parameter in the natural unit of its error (scale factors relative, ppm)."""
-    if params.sigma is None:
-        return np.full(P.N_PARAMS, np.nan)
-    sigma = params.sigma / P.NATURAL_SCALE
-    sigma[P.SCALE_MASK] /= np.abs(params.values[P.SCALE_MASK])
-    return sigma
+    return params.natural_sigma()
 
 
 def parameter_report(result, truth: P.ParameterSet | None = None) -> pd.DataFrame:
     """The calibrated parameters with sigma in natural units (and errors against a truth)."""
     params = result.parameters
-    frame = pd.DataFrame({"parameter": P.NAMES, "unit": P.UNITS, "value": params.values,
-                          "natural unit": P.NATURAL_UNITS, "sigma (natural)": natural_sigma(params)})
+    frame = pd.DataFrame({"parameter": params.names, "unit": params.units, "value": params.values,
+                          "natural unit": params.natural_units, "sigma (natural)": params.natural_sigma()})
     if truth is not None:
-        err = P.natural_errors(params.values, truth.values)
-        frame["truth"] = truth.values
+        err = P.natural_errors(params, truth)
+        frame["truth"] = truth.aligned(params.names)
         frame["error (natural)"] = err
         frame["error/sigma"] = err / frame["sigma (natural)"]
     return frame

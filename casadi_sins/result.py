@@ -53,14 +53,17 @@ class CalibrationResult:
 
     def history_frame(self, truth: P.ParameterSet | None = None) -> pd.DataFrame:
         """Parameters x iterations, shaped like the paper's Table 2 (values; errors in natural units with truth)."""
-        frame = pd.DataFrame({"parameter": P.NAMES, "unit": P.UNITS})
-        for k, values in enumerate(self.history):
+        names = self.parameters.names
+        frame = pd.DataFrame({"parameter": names, "unit": self.parameters.units})
+        history = [np.asarray(v)[: len(names)] for v in self.history]
+        for k, values in enumerate(history):
             label = "initial" if k == 0 else f"iteration {k}"
             frame[label] = values
         if truth is not None:
-            frame["truth"] = truth.values
-            frame["error unit"] = P.NATURAL_UNITS
-            for k, values in enumerate(self.history):
+            reference = truth.aligned(names)
+            frame["truth"] = reference
+            frame["error unit"] = self.parameters.natural_units
+            for k, values in enumerate(history):
                 label = "initial" if k == 0 else f"iteration {k}"
-                frame[f"error {label}"] = P.natural_errors(values, truth.values)
+                frame[f"error {label}"] = P.natural_errors(values, reference, names)
         return frame

@@ -50,6 +50,17 @@ class Motion:
             return self.angle * 0.5 * (1.0 - np.cos(np.pi * tau))
         return self.angle * (tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi))  # versine: rate ~ 1 - cos
 
+    def rate_at(self, t: np.ndarray) -> np.ndarray:
+        """Rate of turn (rad/s) about the axis: the derivative of :meth:`angle_at`."""
+        span = self.t1 - self.t0
+        tau = (np.asarray(t) - self.t0) / span
+        inside = (tau >= 0.0) & (tau <= 1.0)
+        if self.profile == "half-sine":
+            rate = self.angle * 0.5 * np.pi / span * np.sin(np.pi * tau)
+        else:
+            rate = self.angle / span * (1.0 - np.cos(2.0 * np.pi * tau))
+        return np.where(inside, rate, 0.0)
+
     def attitude_at(self, t: np.ndarray) -> np.ndarray:
         if self.axis is None:
             return np.broadcast_to(self.attitude, np.shape(t) + (3, 3))
@@ -226,6 +237,58 @@ def true_increments(pieces: list[Motion], n_samples: int, dt: float, earth_rate:
     return dtheta, dv
 
 
+def kinematics_function(pieces: list[Motion], earth_rate: np.ndarray, gravity: float, sway: Sway | None = None):
+    """``kinematics(t) -> (C_b^n, w_b, w_dot_b, f_b)`` at any times (shape ``t.shape + (3, 3)`` / ``(3,)``).
+
+    ``w_b`` is the body's inertial rate (table, sway and Earth rate), ``f_b`` the specific force at the
+    unit's centre (the base turns it about its centre), ``w_dot_b`` by a central difference of 10 us.
+    """
+    starts = np.array([p.t0 for p in pieces])
+
+    def attitude_and_rate(flat):
+        index = np.clip(np.searchsorted(starts, flat, side="right") - 1, 0, len(pieces) - 1)
+        attitude = np.empty(flat.shape + (3, 3))
+        table_rate = np.zeros(flat.shape + (3,))
+        for k in np.unique(index):
+            sel = index == k
+            piece = pieces[k]
+            attitude[sel] = piece.attitude_at(flat[sel])
+            if piece.axis is not None:
+                table_rate[sel] = np.outer(piece.rate_at(flat[sel]), piece.axis)
+        inertial = np.broadcast_to(earth_rate, flat.shape + (3,))
+        if sway is not None:
+            attitude = sway.attitude(flat) @ attitude
+            inertial = inertial + sway.rate(flat)
+        rate = np.einsum("nji,nj->ni", attitude, inertial) + table_rate
+        return attitude, rate
+
+    def kinematics(t):
+        t = np.asarray(t, dtype=float)
+        flat = t.ravel()
+        attitude, rate = attitude_and_rate(flat)
+        step = 1e-5
+        rate_dot = (attitude_and_rate(flat + step)[1] - attitude_and_rate(flat - step)[1]) / (2.0 * step)
+        force = attitude[:, 2, :] * gravity  # C^T (0, 0, g)
+        shape = t.shape
+        return (attitude.reshape(shape + (3, 3)), rate.reshape(shape + (3,)), rate_dot.reshape(shape + (3,)),
+                force.reshape(shape + (3,)))
+
+    return kinematics
+
+
+def accelerometer_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None):
+    """The extra terms of the truth in every accelerometer sample: ``(dv_f, dv_lever, q2)``
+    (:func:`extended.sensed_extras`, exact physics by quadrature, in chunks)."""
+    from .extended import sensed_extras
+
+    kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
+    parts = []
+    for first in range(0, n_samples, _QUADRATURE_CHUNK):
+        t0 = np.arange(first, min(first + _QUADRATURE_CHUNK, n_samples)) * dt
+        parts.append(sensed_extras(kinematics, t0, t0 + dt, problem.truth))
+    return tuple(np.vstack([p[k] for p in parts]) for k in range(3))
+
+
 def gauss_markov(n: int, dt: float, sigma: float, tau: float, rng: np.random.Generator) -> np.ndarray:
     """A first-order Gauss-Markov process per axis, (n, 3), stationary from the start (exact AR(1))."""
     if sigma == 0.0:
@@ -266,6 +329,12 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     n_samples = int(round(duration * problem.rate_hz))
     g = problem.site.g
     dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway)
+    truth = problem.truth
+    extra_output = np.zeros_like(dv)  # what the extras add to K_a dv in the output model
+    if any(truth[n] != 0.0 for n in truth.names[P.N_PARAMS:]):
+        dv, lever, q2 = accelerometer_extras(pieces, problem, n_samples, dt, sway)
+        k2 = np.array([truth[f"accel_quadratic_{a}"] if "accel_quadratic_x" in truth.names else 0.0 for a in "xyz"])
+        extra_output = lever + k2 * q2
     if noise:
         gyro_white = np.hypot(dev.gyro_noise_deg_h * DEG_PER_H * dt, dev.gyro_arw_deg_rth * DEG / 60.0 * np.sqrt(dt))
         accel_white = np.hypot(dev.accel_noise_ug * UG * dt, dev.accel_vrw_ug_rthz * UG * np.sqrt(dt))
@@ -274,7 +343,8 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
         dtheta += dt * gauss_markov(n_samples, dt, dev.gyro_bias_instability_deg_h * DEG_PER_H,
                                     dev.gyro_bias_tau_s, rng)
         dv += dt * gauss_markov(n_samples, dt, dev.accel_bias_instability_ug * UG, dev.accel_bias_tau_s, rng)
-    gyro, accel = P.output_model(dtheta, dv, problem.truth.values, dt)
+    gyro, accel = P.output_model(dtheta, dv, truth.core, dt)
+    accel = accel + extra_output / truth.core[P.ACCEL_SCALE]
     if problem.deviations.quantize:
         gyro, accel = quantize(gyro), quantize(accel)
     time = np.round(np.arange(1, n_samples + 1) * dt, 9)

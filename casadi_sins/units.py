@@ -28,6 +28,13 @@ TO_SI = {
     "rad/pulse": 1.0,
     "deg/pulse": DEG,
     "arcsec/pulse": ARCSEC,
+    "s^2/m": 1.0,
+    "ug/g^2": 1e-6 / G0,
+    "m": 1.0,
+    "mm": 1e-3,
+    "cm": 1e-2,
+    "s": 1.0,
+    "ms": 1e-3,
 }
 
 

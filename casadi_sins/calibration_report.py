@@ -23,7 +23,7 @@ import pandas as pd
 from . import __version__
 from . import parameters as P
 from .noise import SensorNoise, natural_noise_frame
-from .report import markdown_table, natural_sigma
+from .report import markdown_table
 from .units import ARCSEC, DEG, UG
 
 

@@ -9,7 +9,7 @@ import pandas as pd
 
 from . import parameters as P
 from .recording import Recording
-from .report import natural_sigma, save_figure, write_frame
+from .report import save_figure, write_frame
 from .result import CalibrationResult
 from .strapdown import navigate, static_velocities
 

@@ -305,7 +305,7 @@ def natural_errors(estimate, truth, names=None) -> np.ndarray:
     """Errors of an estimate in natural units (ug, ppm, arcsec, deg/h; mm, ms, ug/g^2 for the extras).
 
     ``estimate`` and ``truth`` may be arrays (ordered like ``names``, default the 21) or
-    :class:`ParameterSet`\ s: then the estimate's names, with the truth's value or the group's prior
+    :class:`ParameterSet` objects: then the estimate's names, with the truth's value or the group's prior
     (0) where the truth lacks a name (a truth file of the 21 against an extended estimate).
     """
     if isinstance(estimate, ParameterSet):

@@ -21,7 +21,7 @@ from .initial import rough_parameters
 from .kalman import NoiseSystem
 from .nlp import build_problem, default_observation_spacing, natural_scale
 from .noise import SensorNoise, plan_noise
-from .problem import Problem, load_problem
+from .problem import Problem, ProblemError, load_problem
 from .recording import Recording, read_recording
 from .report import save_figure, write_frame
 from .simulate import simulate
@@ -44,56 +44,80 @@ class Prediction:
     def frame(self) -> pd.DataFrame:
         """Parameter-table layout (``parameter,unit,value,sigma``) plus natural units."""
         frame = self.nominal.to_frame()[["parameter", "unit", "value", "sigma"]]
-        frame["natural unit"] = P.NATURAL_UNITS
+        frame["natural unit"] = self.nominal.natural_units
         frame["sigma (natural)"] = self.sigma_natural
-        frame["weakly observable"] = [n in self.weak for n in P.NAMES]
+        frame["weakly observable"] = [n in self.weak for n in self.nominal.names]
         return frame
 
 
-def predict(rec: Recording, nominal: np.ndarray, noise: SensorNoise, name: str | None = None) -> Prediction:
-    """Predicted covariance of the 21 parameters for a recording's schedule and a sensor noise model.
+#: Weak levels of the extra groups' natural units (mm, ms, ug/g^2).
+WEAK_LEVEL.update({"mm": 5.0, "ms": 0.2, "ug/g^2": 5.0})
+
+
+def predict(rec: Recording, nominal, noise: SensorNoise, name: str | None = None, model="21") -> Prediction:
+    """Predicted covariance of the parameters for a recording's schedule and a sensor noise model.
 
     The NLP's residual Jacobian at ``nominal``, whitened by the Kalman filter of the noise model
-    (:mod:`kalman`), gives ``(J_w^T J_w)^-1``: the Cramer-Rao bound of that model.
+    (:mod:`kalman`), gives ``(J_w^T J_w)^-1``: the Cramer-Rao bound of that model.  ``model`` adds
+    the extra groups (:func:`nlp.model_groups`): their sigma shows what a schedule can see of lever arms,
+    a time offset and quadratic scale.
     """
-    built = build_problem(rec, nominal, default_observation_spacing(rec))
+    from .nlp import model_groups
+
+    names = P.model_names(model_groups(model))
+    nominal = nominal.aligned(names) if isinstance(nominal, P.ParameterSet) else np.asarray(nominal, float)
+    if len(nominal) < len(names):
+        nominal = np.concatenate([nominal, [P.extra_group_of(n).prior for n in names[len(nominal):]]])
+    built = build_problem(rec, nominal, default_observation_spacing(rec), names=names)
     z = np.zeros(built.n_variables)
     _, jac = built.jacobian(z)
     system = NoiseSystem(built.tracks(np.asarray(built.trajectory(z)), True), rec.site.g, rec.site.earth_rate)
     jw = system.whiten(np.asarray(jac), noise).columns
     u, s, vt = np.linalg.svd(jw, full_matrices=False)
     cov_z = (vt.T / s**2) @ vt
-    scale = natural_scale(nominal)
-    covariance = cov_z[: P.N_PARAMS, : P.N_PARAMS] * np.outer(scale, scale)
-    sigma_nat = np.sqrt(np.diag(cov_z)[: P.N_PARAMS])
+    n = len(names)
+    scale = natural_scale(nominal, names)
+    covariance = cov_z[:n, :n] * np.outer(scale, scale)
+    sigma_nat = np.sqrt(np.diag(cov_z)[:n])
     weak = []
-    for _, sl, unit in P.GROUPS:
+    ranges = [(sl, unit) for _, sl, unit in P.GROUPS]
+    offset = P.N_PARAMS
+    for key in P.groups_in(names):
+        group = P.EXTRA_GROUPS[key]
+        ranges.append((slice(offset, offset + len(group.names)), group.natural_unit))
+        offset += len(group.names)
+    for sl, unit in ranges:
         best = sigma_nat[sl].min()
         for i in range(sl.start, sl.stop):
             if sigma_nat[i] > WEAK_RATIO * best or sigma_nat[i] > WEAK_LEVEL[unit]:
-                weak.append(P.NAMES[i])
-    return Prediction(name or rec.name, P.ParameterSet(nominal, covariance=covariance), sigma_nat, weak, noise)
+                weak.append(names[i])
+    return Prediction(name or rec.name, P.ParameterSet(nominal, covariance=covariance, names=names), sigma_nat,
+                      weak, noise)
 
 
-def predict_problem(problem: Problem) -> Prediction:
+def predict_problem(problem: Problem, model="21") -> Prediction:
     """Predicted accuracy of a problem's schedule at its stated noise (noise-free simulation at truth)."""
     sim = simulate(problem, seed=0, noise=False)
     dt = 1.0 / problem.rate_hz
     truth = problem.truth.values
     noise = SensorNoise.from_deviations(problem.deviations, dt, truth[P.GYRO_SCALE], truth[P.ACCEL_SCALE])
-    return predict(sim.recording, truth, noise, name=problem.name)
+    return predict(sim.recording, problem.truth, noise, name=problem.name, model=model)
 
 
-def predict_file(path: str | Path, accel_noise_ug: float | None = None,
-                 gyro_noise_deg_h: float | None = None, noise: SensorNoise | None = None) -> Prediction:
+def predict_file(path: str | Path, accel_noise_ug: float | None = None, gyro_noise_deg_h: float | None = None,
+                 noise: SensorNoise | None = None, model="21") -> Prediction:
     """Predicted accuracy for a problem file or a recording (TOML), told apart by their ``format``.
 
     A problem states its noise; for a recording the noise is measured in its raw data (``noise``, a
     datasheet, overrides); ``accel_noise_ug`` / ``gyro_noise_deg_h`` (white, per sample) override both.
     """
     path = Path(path)
-    with open(path, "rb") as handle:
-        fmt = tomllib.load(handle).get("format", "")
+    try:
+        fmt = tomllib.loads(path.read_text(encoding="utf-8")).get("format", "")
+    except FileNotFoundError:
+        raise ProblemError(f"{path}: no such problem file or recording") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise ProblemError(f"{path}: not a problem file or recording description (TOML): {exc}") from None
     if fmt.startswith("casadi-sins-problem"):
         problem = load_problem(path)
         changes = {k: v for k, v in (("accel_noise_ug", accel_noise_ug), ("gyro_noise_deg_h", gyro_noise_deg_h))
@@ -102,15 +126,15 @@ def predict_file(path: str | Path, accel_noise_ug: float | None = None,
             changes.setdefault("accel_noise_ug", problem.deviations.accel_noise_ug)
             changes.setdefault("gyro_noise_deg_h", problem.deviations.gyro_noise_deg_h)
             changes.update(accel_vrw_ug_rthz=0.0, gyro_arw_deg_rth=0.0)
-        return predict_problem(problem.with_changes(**changes) if changes else problem)
+        return predict_problem(problem.with_changes(**changes) if changes else problem, model)
     rec = read_recording(path)
     nominal = rough_parameters(rec).values
-    model = plan_noise(rec, nominal, noise).model
+    model_noise = plan_noise(rec, nominal, noise).model
     if accel_noise_ug is not None:
-        model.accel_vrw = np.full(3, accel_noise_ug * UG * np.sqrt(rec.dt))
+        model_noise.accel_vrw = np.full(3, accel_noise_ug * UG * np.sqrt(rec.dt))
     if gyro_noise_deg_h is not None:
-        model.gyro_arw = np.full(3, gyro_noise_deg_h * DEG_PER_H * np.sqrt(rec.dt))
-    return predict(rec, nominal, model)
+        model_noise.gyro_arw = np.full(3, gyro_noise_deg_h * DEG_PER_H * np.sqrt(rec.dt))
+    return predict(rec, nominal, model_noise, model=model)
 
 
 def describe_noise(noise: SensorNoise) -> str:
@@ -128,10 +152,12 @@ def describe_noise(noise: SensorNoise) -> str:
 
 
 def comparison_frame(predictions: list[Prediction]) -> pd.DataFrame:
-    frame = pd.DataFrame({"parameter": P.NAMES, "natural unit": P.NATURAL_UNITS})
+    names = list(dict.fromkeys(n for pred in predictions for n in pred.nominal.names))
+    frame = pd.DataFrame({"parameter": names, "natural unit": [P.natural_unit_of(n) for n in names]})
     for pred in predictions:
-        frame[f"{pred.name} sigma"] = pred.sigma_natural
-        frame[f"{pred.name} weak"] = [n in pred.weak for n in P.NAMES]
+        lookup = dict(zip(pred.nominal.names, pred.sigma_natural))
+        frame[f"{pred.name} sigma"] = [lookup.get(n, np.nan) for n in names]
+        frame[f"{pred.name} weak"] = [n in pred.weak for n in names]
     return frame
 
 

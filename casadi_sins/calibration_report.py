@@ -277,7 +277,7 @@ def report_files(result, rec, table_path: str | Path, report_dir: str | Path | N
              md_path: text.encode()}
     if report_dir is not None:
         out = Path(report_dir)
-        stem = f"{_safe(rec.name)}-{result.solver}"
+        stem = f"{rec.file_stem}-{result.solver}"
         files[out / f"{stem}-report.md"] = text.encode()
         files[out / f"{stem}-report.json"] = files[json_path]
         from .report import parameter_report
@@ -292,12 +292,6 @@ def report_files(result, rec, table_path: str | Path, report_dir: str | Path | N
         if allan is not None:
             files[out / f"{stem}-allan.png"] = allan
     return files
-
-
-def _safe(name: str) -> str:
-    """A recording name as a file name: no folders, nothing but letters, digits, ``-_.``."""
-    cleaned = "".join(c if c.isalnum() or c in "-_." else "-" for c in Path(str(name)).name)
-    return cleaned.strip(".") or "recording"
 
 
 def _json_default(value):

@@ -87,9 +87,9 @@ def cmd_navigate(args) -> int:
         navs[label] = navigate(rec, values)
         print(f"navigated {rec.name} with {label} in {time.perf_counter() - t0:.2f} s")
         table = static_velocity_table(rec, navs[label])
-        write_frame(table, out / f"{rec.name}-{_slug(label)}-static", f"{rec.name}: static segments, {label}")
+        write_frame(table, out / f"{rec.file_stem}-{_slug(label)}-static", f"{rec.name}: static segments, {label}")
         print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
-    plot = plot_navigation(rec, navs, out / f"{rec.name}-velocity.png")
+    plot = plot_navigation(rec, navs, out / f"{rec.file_stem}-velocity.png")
     print(f"wrote {plot}")
     return 0
 
@@ -104,8 +104,7 @@ def cmd_calibrate(args) -> int:
     from .result import CalibrationError
     from .solvers import calibrate
 
-    check_writable(args.out)  # before any computation
-    if args.report:
+    if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
     rec = read_recording(args.recording)
     truth = read_table(args.truth) if args.truth else None
@@ -177,7 +176,7 @@ def cmd_analyze(args) -> int:
     predictions = []
     for path in args.inputs:
         t0 = time.perf_counter()
-        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h)
+        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h, model=args.model)
         predictions.append(pred)
         print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
               f"{', '.join(pred.weak) or 'none'}")
@@ -374,9 +373,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--accel-noise-ug", type=float, help="accelerometer white noise per sample (default: the "
-                   "problem's, or 50 for a recording)")
+                   "problem's, or measured in the recording)")
     p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
-                   "problem's, or 0.01 for a recording)")
+                   "problem's, or measured in the recording)")
+    p.add_argument("--model", default="21", choices=["21", "extended"],
+                   help="extended: also predict the extra terms (quadratic scale, lever arms, time offset)")
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")
@@ -415,9 +416,17 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Commands whose --out is a folder (the others write one file).
+FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo"}
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
+        if getattr(args, "out", None):
+            from .io import check_writable
+
+            check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
         return args.func(args)
     except _known_errors() as exc:
         print(f"casadi-sins {args.command}: error: {exc}", file=sys.stderr)
@@ -425,6 +434,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:  # a file system failure: one line naming the file, never a traceback
+        where = exc.filename or ""
+        print(f"casadi-sins {args.command}: error: {where}{': ' if where else ''}{exc.strerror or exc}",
+              file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

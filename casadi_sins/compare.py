@@ -110,10 +110,10 @@ def compare(rec: Recording, out_dir: str | Path, truth: P.ParameterSet | None = 
     residuals = {name: static_residuals(rec, res) for name, res in results.items()}
     table = comparison_table(results, truth)
     summary = summary_table(rec, results, residuals)
-    stem = out_dir / f"{rec.name}-compare"
+    stem = out_dir / f"{rec.file_stem}-compare"
     write_frame(table, stem, f"{rec.name}: NLP and ILS side by side (natural units: ug, ppm, arcsec, deg/h)")
-    write_frame(summary, out_dir / f"{rec.name}-compare-summary", f"{rec.name}: solvers")
-    plot_residuals(rec, residuals, out_dir / f"{rec.name}-compare-residuals.png")
+    write_frame(summary, out_dir / f"{rec.file_stem}-compare-summary", f"{rec.name}: solvers")
+    plot_residuals(rec, residuals, out_dir / f"{rec.file_stem}-compare-residuals.png")
     for name, res in results.items():
-        P.write_table(out_dir / f"{rec.name}-{name}.csv", res.parameters, truth)
+        P.write_table(out_dir / f"{rec.file_stem}-{name}.csv", res.parameters, truth)
     return results, table, summary

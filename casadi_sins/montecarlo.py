@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Callable, Sequence
 
 import numpy as np
@@ -129,15 +128,23 @@ def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datash
             if progress:
                 progress(k, len(seeds))
         return pd.DataFrame(rows)
+    import functools
     import multiprocessing
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, model) for seed in seeds]
-        for k, fut in enumerate(as_completed(futures), 1):
-            rows += fut.result()
+    # spawned workers that ignore Ctrl-C: the parent alone handles it, terminates them and reports
+    with multiprocessing.get_context("spawn").Pool(workers, initializer=_ignore_interrupts) as pool:
+        task = functools.partial(run_seed, problem, solvers=tuple(solvers), use_datasheet=use_datasheet, model=model)
+        for k, result in enumerate(pool.imap_unordered(task, seeds), 1):
+            rows += result
             if progress:
                 progress(k, len(seeds))
     return pd.DataFrame(rows)
+
+
+def _ignore_interrupts():
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")

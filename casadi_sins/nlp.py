@@ -669,6 +669,8 @@ def _fit(rec: Recording, problem: Problem, noise_plan: NoisePlan, use_rotation_s
     """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model)."""
     weights = quick_weights(problem, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
     z, stats = _solve_ipopt(problem, weights, hessian, tolerance, max_iterations, progress)
+    if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
+        raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
     if not stats["success"]:
         # a rank deficiency is the likelier cause: name it
         _check_rank(np.asarray(problem.jacobian(z)[1]), problem.variable_names())

@@ -137,10 +137,13 @@ def load_problem(path: str | Path | None = None) -> Problem:
     """Read a problem file (default: the paper's experiment)."""
     path = Path(path) if path is not None else default_problem_path()
     try:
-        with open(path, "rb") as handle:
-            doc = tomllib.load(handle)
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ProblemError(f"{path}: no such problem file") from None
+    except IsADirectoryError:
+        raise ProblemError(f"{path}: is a folder, not a problem file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProblemError(f"{path}: cannot be read as a TOML problem file ({exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ProblemError(f"{path}: not valid TOML: {exc}") from None
     if doc.get("format") != FORMAT:

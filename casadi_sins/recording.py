@@ -108,6 +108,11 @@ class Recording:
         return str(self.source) if self.source else self.name
 
     @property
+    def file_stem(self) -> str:
+        """The name as a file name: no folders, nothing but letters, digits and ``-_.``."""
+        return safe_stem(self.name)
+
+    @property
     def group_ids(self) -> list[int]:
         seen: list[int] = []
         for seg in self.segments:
@@ -143,6 +148,12 @@ class Recording:
                                    name=name or self.name, source=None)
 
 
+def safe_stem(name: str) -> str:
+    """A name usable as a file name inside an output folder (``../x`` cannot leave it)."""
+    cleaned = "".join(c if c.isalnum() or c in "-_." else "-" for c in str(name).replace("\\", "/").split("/")[-1])
+    return cleaned.strip(".") or "recording"
+
+
 # --------------------------------------------------------------------------- reading
 def read_recording(path: str | Path) -> Recording:
     """Read and validate a recording from its TOML description.
@@ -153,26 +164,20 @@ def read_recording(path: str | Path) -> Recording:
         With the file and the line or segment of the first problem found.
     """
     path = Path(path)
-    try:
-        with open(path, "rb") as handle:
-            doc = tomllib.load(handle)
-    except FileNotFoundError:
-        raise RecordingError(f"{path}: no such recording description") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise RecordingError(f"{path}: not valid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise RecordingError(f"{path}: not a text file ({exc})") from None
+    doc = _read_toml(path)
     if doc.get("format") != FORMAT:
         raise RecordingError(f"{path}: format must be {FORMAT!r}, found {doc.get('format')!r}")
     name = _require(doc, "name", str, path)
     data_name = _require(doc, "data", str, path)
+    if not data_name.strip():
+        raise RecordingError(f"{path}: 'data' is empty; it must name the CSV of samples")
     site = _parse_site(doc.get("site"), path)
     imu = doc.get("imu")
     if not isinstance(imu, dict):
         raise RecordingError(f"{path}: missing [imu] table with rate_hz")
     rate_hz = _number(imu.get("rate_hz"), f"{path}: [imu] rate_hz")
-    if rate_hz <= 0:
-        raise RecordingError(f"{path}: [imu] rate_hz must be positive, found {rate_hz}")
+    if not 1.0 <= rate_hz <= 1e5:
+        raise RecordingError(f"{path}: [imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz}")
     segments = _parse_segments(doc.get("segments"), path)
     data_path = (path.parent / data_name).resolve()
     time, pulses = _read_samples(data_path, rate_hz)
@@ -182,7 +187,29 @@ def read_recording(path: str | Path) -> Recording:
     if rate_warning:
         rec.warnings.append(rate_warning)
     validate_schedule(rec)
+    check_physical_range(rec, data_path)
     return rec
+
+
+def _read_toml(path: Path) -> dict:
+    """The description as a dictionary; every failure a :class:`RecordingError` naming the file (and line)."""
+    if path.is_dir():
+        raise RecordingError(f"{path}: is a folder; give the recording description NAME.toml")
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise RecordingError(f"{path}: no such recording description") from None
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise RecordingError(f"{path}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RecordingError(f"{path}: not valid TOML: {exc}") from None
 
 
 def _require(doc: dict, key: str, kind: type, where) -> object:
@@ -205,6 +232,8 @@ def _parse_site(site, path: Path) -> Site:
     if not -90.0 <= lat <= 90.0:
         raise RecordingError(f"{path}: [site] latitude_deg {lat} is outside -90..90")
     height = _number(site.get("height_m", 0.0), f"{path}: [site] height_m")
+    if not -500.0 <= height <= 10000.0:
+        raise RecordingError(f"{path}: [site] height_m {height} is outside -500..10000 m (a test site on the ground)")
     gravity = site.get("gravity_mps2")
     if gravity is not None:
         gravity = _number(gravity, f"{path}: [site] gravity_mps2")
@@ -252,28 +281,45 @@ def _parse_segments(items, path: Path) -> list[Segment]:
 
 
 def _read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
+
+    Floats are parsed directly (8 bytes a value: 14 million rows in about 1 GB); only when that fails is
+    the file read again as text, to name the line and column at fault.
+    """
+    if data_path.is_dir():
+        raise RecordingError(f"{data_path}: is a folder; 'data' must name the CSV of samples")
     try:
-        frame = pd.read_csv(data_path, dtype=str, keep_default_na=False, skipinitialspace=True)
+        header = pd.read_csv(data_path, nrows=0, skipinitialspace=True)
     except FileNotFoundError:
         raise RecordingError(f"{data_path}: data file not found") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError:
+        _raise_encoding_error(data_path)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise RecordingError(f"{data_path}: not a readable CSV ({exc})") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
-    missing = [c for c in COLUMNS if c not in frame.columns]
+    except OSError as exc:
+        raise RecordingError(f"{data_path}: cannot be read ({exc.strerror or exc})") from None
+    names = {str(c).strip(): c for c in header.columns}
+    missing = [c for c in COLUMNS if c not in names]
     if missing:
         raise RecordingError(f"{data_path}, line 1: missing column(s) {', '.join(missing)}; "
                              f"header must contain {','.join(COLUMNS)}")
-    if len(frame) < 2:
+    try:
+        try:
+            frame = pd.read_csv(data_path, usecols=[names[c] for c in COLUMNS], dtype=np.float64,
+                                skipinitialspace=True, engine="c")
+            values = frame[[names[c] for c in COLUMNS]].to_numpy(dtype=float)
+            if not np.all(np.isfinite(values)):
+                values = _read_samples_slowly(data_path, names)  # names the text at fault
+        except (ValueError, TypeError) as exc:
+            if isinstance(exc, (RecordingError, UnicodeDecodeError)):
+                raise
+            values = _read_samples_slowly(data_path, names)
+    except UnicodeDecodeError:
+        _raise_encoding_error(data_path)
+    except (pd.errors.ParserError, OSError) as exc:
+        raise RecordingError(f"{data_path}: not a readable CSV ({exc})") from None
+    if len(values) < 2:
         raise RecordingError(f"{data_path}: fewer than two samples")
-    values = np.empty((len(frame), len(COLUMNS)))
-    for j, col in enumerate(COLUMNS):
-        numeric = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(numeric)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise RecordingError(f"{data_path}, line {row + 2}, column {col}: "
-                                 f"{frame[col].iloc[row]!r} is not a finite number")
-        values[:, j] = numeric
     time = values[:, 0]
     step = np.diff(time)
     dt = 1.0 / rate_hz
@@ -287,6 +333,61 @@ def _read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarr
         raise RecordingError(f"{data_path}, line {row + 2}: time step {step[row - 1]:.6g} s differs from "
                              f"1/rate_hz = {dt:.6g} s (time must be uniform)")
     return time, values[:, 1:]
+
+
+def _read_samples_slowly(data_path: Path, names: dict) -> np.ndarray:
+    """Read as text to name the first value that is not a finite number."""
+    frame = pd.read_csv(data_path, dtype=str, keep_default_na=False, skipinitialspace=True,
+                        usecols=[names[c] for c in COLUMNS])
+    values = np.empty((len(frame), len(COLUMNS)))
+    for j, col in enumerate(COLUMNS):
+        numeric = pd.to_numeric(frame[names[col]], errors="coerce").to_numpy(dtype=float)
+        bad = ~np.isfinite(numeric)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise RecordingError(f"{data_path}, line {row + 2}, column {col}: "
+                                 f"{frame[names[col]].iloc[row]!r} is not a finite number")
+        values[:, j] = numeric
+    return values
+
+
+def _raise_encoding_error(data_path: Path):
+    """Name the line of the first byte that is not UTF-8."""
+    import gzip
+
+    opener = gzip.open if data_path.suffix == ".gz" else open
+    line = 1
+    with opener(data_path, "rb") as handle:
+        for line, raw in enumerate(handle, start=1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise RecordingError(f"{data_path}, line {line}: not UTF-8 text (byte {raw[exc.start]:#04x})") \
+                    from None
+    raise RecordingError(f"{data_path}: not UTF-8 text")
+
+
+#: Rates and specific forces a calibration table can produce are far below these, in multiples of the
+#: largest typical value of the recording (its 99th percentile): a sample beyond is not a measurement.
+PHYSICAL_RANGE_FACTOR = 1000.0
+
+
+def check_physical_range(rec: "Recording", data_path) -> None:
+    """Reject samples far beyond anything a turntable can produce (1e300, a lost decimal point), naming
+    the line.  The pulses' scale is unknown here, so the limit is relative: 1000 times the 99th
+    percentile of each sensor's largest axis (1 g at rest for the accelerometers, the turntable's rate
+    for the gyros)."""
+    for sensor, pulses, columns in (("gyro", rec.gyro, PULSE_COLUMNS[:3]), ("accel", rec.accel, PULSE_COLUMNS[3:])):
+        magnitude = np.abs(pulses)
+        typical = float(np.percentile(magnitude.max(axis=1), 99))
+        if typical == 0.0:
+            continue
+        beyond = magnitude > PHYSICAL_RANGE_FACTOR * typical
+        if beyond.any():
+            row, col = np.argwhere(beyond)[0]
+            raise RecordingError(f"{data_path}, line {row + 2}, column {columns[col]}: {pulses[row, col]:.6g} is "
+                                 f"{magnitude[row, col] / typical:.3g} times the recording's typical {sensor} value: "
+                                 "not a physical measurement (a lost decimal point?)")
 
 
 def check_rate(time: np.ndarray, rate_hz: float, where) -> str | None:

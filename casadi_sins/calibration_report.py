@@ -106,7 +106,8 @@ def _noise_dict(noise: SensorNoise | None) -> dict | None:
     return out
 
 
-def report_data(result, rec, truth: P.ParameterSet | None = None, command: str | None = None) -> dict:
+def report_data(result, rec, truth: P.ParameterSet | None = None, command: str | None = None,
+                unit_id: str | None = None) -> dict:
     """Everything of the report as plain data (the JSON file)."""
     info = result.info
     raw = info.get("noise_raw")
@@ -117,6 +118,7 @@ def report_data(result, rec, truth: P.ParameterSet | None = None, command: str |
         "software": f"casadi-sins {__version__}",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": command,
+        "unit_id": unit_id,
         "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
                       "sha256": recording_hash(rec), "samples": int(len(rec.time)), "rate_hz": rec.rate_hz,
                       "groups": len(rec.group_ids), "segments": len(rec.segments),
@@ -155,6 +157,7 @@ def report_markdown(data: dict) -> str:
     """The report as Markdown."""
     rec = data["recording"]
     lines = [f"# Calibration report: {rec['name']} ({data['solver']})", "",
+             f"- unit: {data.get('unit_id') or '(no --unit-id given)'}",
              f"- software: {data['software']}, created {data['created']}",
              f"- recording: {rec['source'] or '(in memory)'}, sha256 `{rec['sha256']}`",
              f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
@@ -266,11 +269,12 @@ def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
 
 
 def report_files(result, rec, table_path: str | Path, report_dir: str | Path | None = None,
-                 truth: P.ParameterSet | None = None, command: str | None = None) -> dict[Path, bytes]:
+                 truth: P.ParameterSet | None = None, command: str | None = None,
+                 unit_id: str | None = None) -> dict[Path, bytes]:
     """Every file of a calibration's report, as ``{path: content}`` (written together by the caller)."""
     from .report import frame_files
 
-    data = report_data(result, rec, truth, command)
+    data = report_data(result, rec, truth, command, unit_id)
     json_path, md_path = companion_paths(table_path)
     text = report_markdown(data)
     files = {json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),

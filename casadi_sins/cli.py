@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from . import __version__
 
@@ -94,19 +97,68 @@ def cmd_navigate(args) -> int:
     return 0
 
 
+def export_files(params, table_path, formats, metadata: dict) -> dict:
+    """``{path: content}`` of the exports beside a table ``NAME.csv``: ``NAME.compensation.json`` ..."""
+    from .export import EXPORTS
+
+    stem = Path(table_path).with_suffix("")
+    meta = {k: v for k, v in metadata.items() if v is not None}
+    return {stem.with_name(f"{stem.name}.{EXPORTS[f][0]}"): EXPORTS[f][1](params, meta).encode() for f in formats}
+
+
+def cmd_segment(args) -> int:
+    from .io import atomic_write_text
+    from .recording import RecordingError, Site, _read_samples, description_toml
+    from .report import recording_summary
+    from .segment import segment_recording
+
+    data = Path(args.data)
+    if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
+        raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+    time_, pulses = _read_samples(data.resolve(), args.rate)
+    site = Site(np.radians(args.latitude), args.height, args.gravity)
+    name = args.name or Path(args.out).stem
+    try:
+        rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
+    except RecordingError as exc:
+        raise CliError(f"{data}: {exc}") from None
+    out = Path(args.out)
+    relative = os.path.relpath(data.resolve(), out.resolve().parent)
+    atomic_write_text(out, description_toml(rec, relative))
+    for note in notes:
+        print(f"note: {note}")
+    print(recording_summary(rec))
+    print(f"wrote {out}: {len(rec.segments)} segments in {len(rec.group_ids)} groups")
+    return 0
+
+
+def cmd_export(args) -> int:
+    from .export import EXPORTS
+    from .io import atomic_write_text
+    from .parameters import read_table
+
+    params = read_table(args.table)
+    text = EXPORTS[args.format][1](params, {k: v for k, v in (("unit_id", args.unit_id),
+                                                               ("table", str(args.table))) if v})
+    atomic_write_text(args.out, text)
+    print(f"wrote {args.out} ({args.format})")
+    return 0
+
+
 def cmd_calibrate(args) -> int:
-    from .calibration_report import report_files
+    from .calibration_report import recording_hash, report_files
     from .io import check_writable, write_files
     from .noise import read_noise_spec
     from .parameters import read_table, table_text
     from .recording import read_recording
     from .report import parameter_report
     from .result import CalibrationError
+    from .segment import refine
     from .solvers import calibrate
 
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
-    rec = read_recording(args.recording)
+    rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_noise_spec(args.noise) if args.noise else None
@@ -121,7 +173,10 @@ def cmd_calibrate(args) -> int:
         raise CliError(f"{rec.label}: --strict and {len(warnings)} warning(s), no parameter table written: "
                        + " | ".join(warnings))
     files = {Path(args.out): table_text(result.parameters, truth).encode()}
-    files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv)))
+    files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
+                              unit_id=args.unit_id))
+    files.update(export_files(result.parameters, args.out, args.export or (), {
+        "unit_id": args.unit_id, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver}))
     write_files(files)
     frame = parameter_report(result, truth)
     print(natural_table(frame).to_string(index=False))
@@ -361,7 +416,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
                    help="parameters: the paper's 21 (default); extended: also accelerometer quadratic scale, lever "
                    "arms and the gyro/accel time offset; auto: the extra groups the data support (nlp only)")
+    p.add_argument("--export", nargs="+", choices=["json", "yaml", "psins"],
+                   help="also write the table as compensation matrices (NAME.compensation.json / .yaml) or as the "
+                   "PSINS clbt struct (NAME.clbt.m)")
+    p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
     p.set_defaults(func=cmd_calibrate)
+
+    p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")
+    p.add_argument("data", help="the samples, NAME.csv (time, gyro_x..z, accel_x..z)")
+    p.add_argument("--rate", type=float, required=True, help="sample rate, Hz")
+    p.add_argument("--latitude", type=float, required=True, help="latitude of the site, deg")
+    p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
+    p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
+    p.add_argument("--name", help="recording name (default: the output's stem)")
+    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment (s)")
+    p.add_argument("--out", required=True, help="recording description NAME.toml to write")
+    p.set_defaults(func=cmd_segment)
+
+    p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML) or PSINS clbt text")
+    p.add_argument("table", help="parameter table CSV")
+    p.add_argument("--format", required=True, choices=["json", "yaml", "psins"])
+    p.add_argument("--out", required=True, help="file to write")
+    p.add_argument("--unit-id", help="serial number of the unit")
+    p.set_defaults(func=cmd_export)
 
     p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")
     p.add_argument("recording")
@@ -387,7 +464,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--solvers", nargs="+", default=["nlp", "ils"], choices=["nlp", "ils"])
     p.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address, or 'local'")
-    p.add_argument("--out", default="results", help="output folder (default results/)")
+    p.add_argument("--out", default="runs/montecarlo", help="output folder (default runs/montecarlo)")
     p.set_defaults(func=cmd_montecarlo)
 
     p = sub.add_parser("navcheck", help="1 h free-inertial navigation of a fresh static recording per table")
@@ -411,7 +488,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="simulate the paper's experiment and compare both solvers into results/")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--out", default="results", help="output folder (default results/)")
+    p.add_argument("--out", default="runs/demo", help="output folder (default runs/demo; the published "
+                   "results/ are made by benchmarks/regenerate_results.sh)")
     p.set_defaults(func=cmd_demo)
     return parser
 
@@ -427,7 +505,10 @@ def main(argv: list[str] | None = None) -> int:
             from .io import check_writable
 
             check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
-        return args.func(args)
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1):  # small matrices: BLAS threads spinning on them cost 3-5x under load
+            return args.func(args)
     except _known_errors() as exc:
         print(f"casadi-sins {args.command}: error: {exc}", file=sys.stderr)
         return 2

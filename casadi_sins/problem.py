@@ -6,7 +6,8 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
     [site]      latitude_deg, height_m, optional gravity_mps2
     [imu]       rate_hz
     [timing]    static_s, rotation_s, optional first_static_s, gap_s, rate_profile
-    [[groups]]  start = "NUE", rotations = ["+Z", "+Z", "+Z"], optional angle_deg = 90
+    [[groups]]  start = "NUE", rotations = ["+Z", "-Y 180", ...] (axis, optional angle),
+                optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration)
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
                 accel_noise_ug, gyro_noise_deg_h, quantize
     [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}; the 21, and any
@@ -40,9 +41,21 @@ class ProblemError(ValueError):
 
 @dataclasses.dataclass(frozen=True)
 class GroupPlan:
+    """One group: its start orientation, the rotations (an axis, or ``"axis angle"`` such as ``"-Y 180"``),
+    the default angle, and optionally each static segment's duration (one more than the rotations)."""
+
     start: str
     rotations: tuple[str, ...]
     angle_deg: float = 90.0
+    statics_s: tuple[float, ...] | None = None
+
+    def turns(self) -> list[tuple[str, float]]:
+        """``(axis, angle_deg)`` of each rotation."""
+        out = []
+        for entry in self.rotations:
+            parts = entry.split()
+            out.append((parts[0], float(parts[1]) if len(parts) > 1 else self.angle_deg))
+        return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,17 +123,18 @@ class Problem:
             if gi > 1:
                 t += self.timing.gap_s
             dcm = frames.orientation_to_dcm(plan.start)
-            first = self.timing.first_static_s or self.timing.static_s
-            segs.append(Segment(len(segs) + 1, gi, "static", t, t + first, orientation=plan.start))
-            t += first
-            for axis in plan.rotations:
+            durations = plan.statics_s or ((self.timing.first_static_s or self.timing.static_s),) + \
+                (self.timing.static_s,) * len(plan.rotations)
+            segs.append(Segment(len(segs) + 1, gi, "static", t, t + durations[0], orientation=plan.start))
+            t += durations[0]
+            for (axis, angle), duration in zip(plan.turns(), durations[1:]):
                 segs.append(Segment(len(segs) + 1, gi, "rotation", t, t + self.timing.rotation_s,
-                                    axis=axis, angle_deg=plan.angle_deg))
+                                    axis=axis, angle_deg=angle))
                 t += self.timing.rotation_s
-                dcm = frames.rotate_body(dcm, axis, math.radians(plan.angle_deg))
+                dcm = frames.rotate_body(dcm, axis, math.radians(angle))
                 letters = frames.dcm_to_orientation(dcm, tol_deg=1e-6)
-                segs.append(Segment(len(segs) + 1, gi, "static", t, t + self.timing.static_s, orientation=letters))
-                t += self.timing.static_s
+                segs.append(Segment(len(segs) + 1, gi, "static", t, t + duration, orientation=letters))
+                t += duration
         return [dataclasses.replace(s, start=round(s.start, 9), end=round(s.end, 9)) for s in segs]
 
     @property
@@ -187,14 +201,25 @@ def load_problem(path: str | Path | None = None) -> Problem:
         try:
             start = str(item["start"]).upper()
             frames.orientation_to_dcm(start)
-            rotations = tuple(str(a).upper() for a in item.get("rotations", []))
-            for axis in rotations:
-                frames.parse_axis(axis)
-        except (KeyError, TypeError) as exc:
-            raise ProblemError(f"{path}: [[groups]] {gi}: missing or invalid {exc}") from None
+            rotations = tuple(" ".join(str(a).upper().split()) for a in item.get("rotations", []))
+            for entry in rotations:
+                parts = entry.split()
+                frames.parse_axis(parts[0])
+                if len(parts) > 2 or (len(parts) == 2 and not math.isfinite(float(parts[1]))):
+                    raise ValueError(entry)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ProblemError(f"{path}: [[groups]] {gi}: missing or invalid {exc} (rotations are \"+Z\" or "
+                               "\"-Y 180\")") from None
         except frames.OrientationError as exc:
             raise ProblemError(f"{path}: [[groups]] {gi}: {exc}") from None
-        groups.append(GroupPlan(start, rotations, number(item, "angle_deg", f"groups {gi}", 90.0)))
+        statics = item.get("statics_s")
+        if statics is not None:
+            if not isinstance(statics, list) or len(statics) != len(rotations) + 1:
+                raise ProblemError(f"{path}: [[groups]] {gi}: statics_s must list {len(rotations) + 1} durations")
+            statics = tuple(number({"v": v}, "v", f"groups {gi} statics_s") for v in statics)
+            if min(statics) <= 0:
+                raise ProblemError(f"{path}: [[groups]] {gi}: statics_s must be positive")
+        groups.append(GroupPlan(start, rotations, number(item, "angle_deg", f"groups {gi}", 90.0), statics))
     if not groups:
         raise ProblemError(f"{path}: no [[groups]]")
 

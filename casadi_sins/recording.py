@@ -54,6 +54,10 @@ class Site:
     def earth_rate(self) -> np.ndarray:
         return frames.earth_rate_enu(self.latitude)
 
+    @property
+    def earth_rate_norm(self) -> float:
+        return frames.EARTH_RATE
+
 
 @dataclasses.dataclass(frozen=True)
 class Segment:
@@ -367,27 +371,37 @@ def _raise_encoding_error(data_path: Path):
     raise RecordingError(f"{data_path}: not UTF-8 text")
 
 
-#: Rates and specific forces a calibration table can produce are far below these, in multiples of the
-#: largest typical value of the recording (its 99th percentile): a sample beyond is not a measurement.
-PHYSICAL_RANGE_FACTOR = 1000.0
+#: Beyond these no navigation-grade unit measures and no turntable moves: rad/s and m/s^2.
+MAX_RATE = np.radians(2000.0)
+MAX_SPECIFIC_FORCE = 100.0 * 9.80665
 
 
 def check_physical_range(rec: "Recording", data_path) -> None:
-    """Reject samples far beyond anything a turntable can produce (1e300, a lost decimal point), naming
-    the line.  The pulses' scale is unknown here, so the limit is relative: 1000 times the 99th
-    percentile of each sensor's largest axis (1 g at rest for the accelerometers, the turntable's rate
-    for the gyros)."""
-    for sensor, pulses, columns in (("gyro", rec.gyro, PULSE_COLUMNS[:3]), ("accel", rec.accel, PULSE_COLUMNS[3:])):
-        magnitude = np.abs(pulses)
-        typical = float(np.percentile(magnitude.max(axis=1), 99))
-        if typical == 0.0:
+    """Reject samples far beyond anything a unit on a turntable measures (1e300, a lost decimal point),
+    naming the line.  The pulses' sizes are unknown here; robust rough ones come from the static
+    segments' medians (1 g of specific force, the Earth rate), which a few wild samples cannot move."""
+    statics = [rec.segment_samples(seg) for seg in rec.static_segments]
+    if not statics:
+        return
+    for sensor, pulses, columns, magnitude, limit, unit in (
+            ("gyro", rec.gyro, PULSE_COLUMNS[:3], rec.site.earth_rate_norm, MAX_RATE, "deg/s"),
+            ("accel", rec.accel, PULSE_COLUMNS[3:], rec.site.g, MAX_SPECIFIC_FORCE, "g")):
+        medians = np.array([np.median(pulses[sl], axis=0) for sl in statics])
+        design = medians**2
+        if not np.all(np.any(design > 0, axis=0)):
             continue
-        beyond = magnitude > PHYSICAL_RANGE_FACTOR * typical
+        u = np.linalg.lstsq(design, np.full(len(statics), (magnitude * rec.dt) ** 2), rcond=None)[0]
+        if np.any(u <= 0):
+            continue
+        pulse_size = np.sqrt(u)  # per axis, SI per pulse
+        values = np.abs(pulses) * pulse_size / rec.dt
+        beyond = values > limit
         if beyond.any():
             row, col = np.argwhere(beyond)[0]
-            raise RecordingError(f"{data_path}, line {row + 2}, column {columns[col]}: {pulses[row, col]:.6g} is "
-                                 f"{magnitude[row, col] / typical:.3g} times the recording's typical {sensor} value: "
-                                 "not a physical measurement (a lost decimal point?)")
+            shown = values[row, col] / (np.radians(1.0) if unit == "deg/s" else 9.80665)
+            raise RecordingError(f"{data_path}, line {row + 2}, column {columns[col]}: {pulses[row, col]:.6g} pulses "
+                                 f"would be about {shown:.3g} {unit}: not a physical measurement (a lost decimal "
+                                 "point?)")
 
 
 def check_rate(time: np.ndarray, rate_hz: float, where) -> str | None:
@@ -495,14 +509,41 @@ def description(rec: Recording, data_name: str) -> dict:
             "imu": {"rate_hz": rec.rate_hz}, "segments": segments}
 
 
-def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray) -> str:
+#: Rows per chunk when writing a CSV (a 14-million-row file never exists as one string).
+CSV_CHUNK = 500_000
+
+
+def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: slice | None = None,
+                header: bool = True) -> str:
     """CSV text of samples; floats in shortest round-trip form, integral pulses as integers."""
-    frame = pd.DataFrame({"time": np.round(time, 9)})
+    rows = rows or slice(None)
+    frame = pd.DataFrame({"time": np.round(time[rows], 9)})
     for j, col in enumerate(PULSE_COLUMNS):
-        data = gyro[:, j] if j < 3 else accel[:, j - 3]
-        integral = np.all(data == np.round(data)) and np.abs(data).max(initial=0) < 2**53
-        frame[col] = data.astype(np.int64) if integral else data
-    return frame.to_csv(index=False, lineterminator="\n")
+        whole = gyro[:, j] if j < 3 else accel[:, j - 3]
+        integral = np.all(whole == np.round(whole)) and np.abs(whole).max(initial=0) < 2**53
+        frame[col] = whole[rows].astype(np.int64) if integral else whole[rows]
+    return frame.to_csv(index=False, header=header, lineterminator="\n")
+
+
+def _write_samples(path: Path, rec: "Recording") -> Path:
+    """The CSV of a recording, written in chunks to a temporary file and renamed when complete."""
+    import os
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
+            for first in range(0, len(rec.time), CSV_CHUNK):
+                handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
+                                         header=first == 0))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
 
 
 def _toml_value(value) -> str:
@@ -533,6 +574,6 @@ def write_recording(rec: Recording, toml_path: str | Path) -> Path:
     """Write ``NAME.toml`` and its CSV (same stem) atomically; returns the TOML path."""
     toml_path = Path(toml_path)
     csv_path = toml_path.with_suffix(".csv")
-    atomic_write_text(csv_path, samples_csv(rec.time, rec.gyro, rec.accel))
+    _write_samples(csv_path, rec)
     atomic_write_text(toml_path, description_toml(rec, csv_path.name))
     return toml_path

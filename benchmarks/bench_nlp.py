@@ -26,7 +26,8 @@ from casadi_sins import montecarlo as MC
 from casadi_sins import parameters as P
 from casadi_sins.ils import calibrate_ils
 from casadi_sins.initial import rough_parameters
-from casadi_sins.nlp import build_problem, calibrate_nlp, natural_to_parameters
+from casadi_sins.nlp import build_problem, calibrate_nlp, natural_to_parameters, quick_weights
+from casadi_sins.noise import plan_noise
 from casadi_sins.problem import load_problem
 from casadi_sins.report import write_frame
 from casadi_sins.simulate import simulate
@@ -102,7 +103,8 @@ def section_baseline(problem, out):
     def baseline():
         reference = rough_parameters(rec).values
         built = build_problem(rec, reference)
-        fun = lambda z: np.asarray(built.residuals(z)).ravel()  # noqa: E731
+        weights = quick_weights(built, plan_noise(rec, reference).model, rec.dt, True)  # the NLP's stage-1 weights
+        fun = lambda z: weights @ np.asarray(built.residuals(z)).ravel()  # noqa: E731
         sol = least_squares(fun, np.zeros(built.n_variables), jac="2-point", method="trf", x_scale=1.0)
         return natural_to_parameters(sol.x[: P.N_PARAMS], reference), sol
 

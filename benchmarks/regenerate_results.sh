@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerate everything in results/ (CSV, Markdown, PNG) with one command: bash benchmarks/regenerate_results.sh
-# About 20 minutes on a 2-core machine.  Each step prints its figures; the timing outputs go to results/*.txt.
+# About 90 minutes on a 2-core machine (the noise Monte Carlo is 40 of them).  Each step prints its figures;
+# the printed outputs go to results/*.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-results}
@@ -8,6 +9,10 @@ mkdir -p "$out"
 casadi-sins demo --out "$out"                                                  # compare, navcheck, budget
 casadi-sins analyze problems/kang2013.toml problems/xie2011-19pos.toml --out "$out"   # predicted sigma
 casadi-sins montecarlo --runs 50 --out "$out"                                  # RMS against predicted sigma
+python benchmarks/bench_noise.py --runs 50 --no-datasheet --out "$out" | tee "$out/noise-benchmark.txt"
+python benchmarks/bench_extended.py --runs 30 --out "$out" | tee "$out/extended-benchmark.txt"
+python benchmarks/bench_phases.py --out "$out" | tee "$out/main-job-phases.txt"
+python benchmarks/bench_long.py --out "$out" | tee "$out/long-file.txt"
 python benchmarks/bench_nlp.py --seeds 50 --out "$out" | tee "$out/nlp-benchmark.txt"
 python benchmarks/bench_ils.py --seeds 20 --out "$out" | tee "$out/ils-benchmark.txt"
 python benchmarks/sweep_start_attitude.py --seeds 8 --solvers nlp ils --out "$out"

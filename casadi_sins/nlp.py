@@ -40,7 +40,10 @@ Uncertainty
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import signal
+import threading
 import time
 from typing import Callable
 
@@ -404,7 +407,10 @@ def _solve_ipopt(problem: Problem, weights: sp.csr_matrix, hessian: str, toleran
     elif hessian != "exact":
         raise ValueError(f"unknown hessian {hessian!r}")
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
-    sol = solver(x0=np.zeros(problem.n_variables))
+    with _interruptions() as interrupted:
+        sol = solver(x0=np.zeros(problem.n_variables))
+    if interrupted:  # CasADi stops Ipopt on Ctrl-C and reports an exception: it is an interruption
+        raise KeyboardInterrupt
     stats = solver.stats()
     if progress:
         progress(f"nlp: ipopt {stats['return_status']} after {stats['iter_count']} iterations, "
@@ -414,6 +420,25 @@ def _solve_ipopt(problem: Problem, weights: sp.csr_matrix, hessian: str, toleran
 
 #: Static segments longer than this many observations are observed more sparsely (long files).
 OBSERVATIONS_PER_SEGMENT = 300
+
+
+@contextlib.contextmanager
+def _interruptions():
+    """Record a Ctrl-C that arrives while C++ code runs (CasADi turns it into a failed solve)."""
+    seen: list[bool] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield seen
+        return
+
+    def handler(signum, frame):
+        seen.append(True)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def default_observation_spacing(rec: Recording) -> float:

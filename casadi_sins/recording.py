@@ -527,22 +527,12 @@ def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: sli
 
 def _write_samples(path: Path, rec: "Recording") -> Path:
     """The CSV of a recording, written in chunks to a temporary file and renamed when complete."""
-    import os
-    import tempfile
+    from .io import atomic_open
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
-            for first in range(0, len(rec.time), CSV_CHUNK):
-                handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                         header=first == 0))
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_open(path, "w", encoding="utf-8", newline="") as handle:
+        for first in range(0, len(rec.time), CSV_CHUNK):
+            handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
+                                     header=first == 0))
     return path
 
 

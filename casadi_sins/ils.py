@@ -50,6 +50,9 @@ ABSOLUTE_TOLERANCE = np.where(
     np.isin(np.array(P.NATURAL_UNITS), ["deg/h"]), 1e-5, 1e-3
 )
 
+#: The longest group the ILS takes: it holds per-sample sensitivities (21 per axis) and navigation states.
+MAX_GROUP_SAMPLES = 1_500_000
+
 SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
                  "from the sensor noise model (raw-data estimate or datasheet), times the variance factor when "
                  "the residuals exceed it")
@@ -305,6 +308,11 @@ def calibrate_ils(rec: Recording, initial: P.ParameterSet | None = None, max_ite
         raise CalibrationError("the ILS (the paper's method) fits the 21 parameters only: its slopes and curvatures "
                                "of the static velocity do not see the velocity steps across rotations where lever "
                                "arms and a time offset act; use the nlp solver for the extended model")
+    longest = max(rec.group_samples(g).stop - rec.group_samples(g).start for g in rec.group_ids)
+    if longest > MAX_GROUP_SAMPLES:
+        raise CalibrationError(f"a group of {longest} samples: the ILS keeps the error model's sensitivities of every "
+                               f"sample (about 5 kB each), more than {MAX_GROUP_SAMPLES} samples would need "
+                               f"{longest * 5e3 / 1e9:.0f} GB; the nlp solver handles long files")
     t_start = time.perf_counter()
     initial = initial or rough_parameters(rec)
     params = initial.core.copy()

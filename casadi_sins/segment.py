@@ -9,7 +9,8 @@ the Earth rate (15 deg/h), turning they see degrees per second, a ratio of thous
    quiet stretches shorter than ``min_static_s`` belong to the motion around them, and a static
    segment keeps 0.1 s clear of the motion beside it;
 2. the pulses' sizes are unknown, but at rest the gyros must see the Earth rate and the
-   accelerometers 1 g: least squares over the static stretches gives rough sizes (about 1 %);
+   accelerometers 1 g: least squares over the static stretches gives rough sizes (about 1 %, a tenth
+   on a swaying base); the gyros' are refined by the turns, which are multiples of 90 deg;
 3. each motion is a rotation when its turned angle (the summed gyro pulses, less the resting rate) is
    close to a multiple of 90 deg about one body axis; otherwise it is handling between groups;
 4. each static stretch gets its orientation letters from gravity (up) and the Earth rate (north);
@@ -125,6 +126,7 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
                              "size the pulses")
     if gyro_size is None:  # equal gyro pulse sizes, from the Earth-rate magnitude
         gyro_size = np.full(3, frames.EARTH_RATE * dt / float(np.mean(np.linalg.norm(gyro_means, axis=1))))
+    gyro_size = _sizes_from_turns(gyro, statics, gyro_means, gyro_size)
     letters = [_orientation(f * accel_size, w * gyro_size) for f, w in zip(accel_means, gyro_means)]
     notes = []
     segments: list[Segment] = []
@@ -167,6 +169,23 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
     renumber = {g: i + 1 for i, g in enumerate(sorted(kept))}
     out = [dataclasses.replace(s, group=renumber[s.group]) for s in segments if s.group in renumber]
     return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)], notes
+
+
+def _sizes_from_turns(gyro: np.ndarray, statics, gyro_means: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """Refine the gyro pulse sizes with the turns themselves: a sway or a bias spoils the Earth rate by
+    a tenth, the turns' multiples of 90 deg do not.  Turns near a multiple of 90 deg (within 30 %) give
+    each axis the median of nominal angle over pulses; an axis that never turns keeps its size."""
+    ratios: list[list[float]] = [[], [], []]
+    for k in range(1, len(statics)):
+        pulses = (gyro[statics[k - 1][1]:statics[k][0]] - (gyro_means[k - 1] + gyro_means[k]) / 2.0).sum(axis=0)
+        rotation = np.degrees(pulses * size)
+        axis = int(np.argmax(np.abs(rotation)))
+        angle = abs(rotation[axis])
+        nominal = 90.0 * round(angle / 90.0)
+        if nominal and abs(angle - nominal) < 0.3 * 90.0 and \
+                np.linalg.norm(np.delete(rotation, axis)) < 3 * AXIS_TOLERANCE * angle:
+            ratios[axis].append(np.radians(nominal) / abs(pulses[axis]))
+    return np.array([np.median(r) if r else size[i] for i, r in enumerate(ratios)])
 
 
 def _turn(pulses: np.ndarray, size: np.ndarray) -> tuple[str, float] | None:

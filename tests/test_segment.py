@@ -61,3 +61,13 @@ def test_approximate_times_are_trimmed_and_motion_inside_a_static_is_refused(two
     bad.segments = [dataclasses.replace(s, number=i + 1) for i, s in enumerate(bad.segments)]
     with pytest.raises(RecordingError, match=r"segment 3 .* holds motion inside it"):
         refine(bad)
+
+
+def test_a_swaying_base_and_integer_pulses_do_not_confuse_the_segmentation():
+    """The sway spoils the Earth rate the gyro pulses are sized by; the turns size them again."""
+    problem = load_problem(PROBLEM).with_changes(sway_amplitude_arcsec=(20.0, 120.0), quantize=True)
+    rec = simulate(problem, seed=4).recording
+    found, _ = segment_recording(rec.time, rec.gyro, rec.accel, rec.rate_hz, rec.site, "found")
+    assert [(s.kind, s.orientation, s.axis, s.angle_deg) for s in found.segments] == \
+           [(s.kind, s.orientation, s.axis, s.angle_deg) for s in rec.segments]
+    assert max(abs(a.start - b.start) for a, b in zip(found.segments, rec.segments)) < 0.2

@@ -614,14 +614,14 @@ def calibrate_nlp(rec: Recording, initial: P.ParameterSet | None = None, hessian
         fit = _gls(rec, problem, noise_plan, unmodelled, fit["z"], fit["use_rotation_steps"], progress,
                    update_free=False)
         fit["stats"] = stats
-        first_warnings = assessment.warnings
+        failed = [f"{c.name} {c.value:.3g} (limit {c.limit:.3g})" for c in assessment.checks if not c.passed]
         assessment = assess(rec, problem, fit, noise_plan)
-        warnings += [f"{w.split(';')[0]}" for w in first_warnings]
         step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
                 if fit["use_rotation_steps"] else "")
-        warnings.append(f"errors outside the model were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} "
-                        f"ug unmodelled acceleration per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} "
-                        f"deg/h per static gyro mean{step}; sigma includes them")
+        warnings.append(f"the residuals exceeded the sensor noise ({'; '.join(failed)}): errors outside the model "
+                        f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
+                        f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "
+                        f"mean{step}; sigma includes them")
     warnings += assessment.warnings
     covariance_w = fit["covariance_natural"] * assessment.variance_factor
     z = fit["z"]

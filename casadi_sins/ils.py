@@ -162,6 +162,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
     for i, eq in enumerate(equations):
         by_group.setdefault(eq.group, []).append(i)
     draws = np.zeros((len(equations), samples))
+    carried = None  # (state draws, end time) of the previous group
     for nav in navs:
         plan = plan_steps(rec, nav.group, 1.0, ROTATION_STEP_S)
         stops = np.cumsum(np.round(plan.step_dt / rec.dt).astype(int)) - 1
@@ -172,9 +173,13 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
         system = NoiseSystem([track], rec.site.g, rec.site.earth_rate)
         phi, q = system._transitions(track, model, n)
         x = np.zeros((n, samples))
-        if markov:
-            x[9:12] = rng.standard_normal((3, samples)) * model.gyro_bias_instability
-            x[12:15] = rng.standard_normal((3, samples)) * model.accel_bias_instability
+        if markov:  # the biases wander on from the previous group (one process over the recording)
+            start = float(plan.start_time)
+            for sl, sigma, tau in ((slice(9, 12), model.gyro_bias_instability, model.gyro_bias_tau),
+                                   (slice(12, 15), model.accel_bias_instability, model.accel_bias_tau)):
+                beta = np.exp(-max(start - carried[1], 0.0) / tau) if carried else 0.0
+                previous = carried[0][sl] if carried else 0.0
+                x[sl] = beta * previous + rng.standard_normal((3, samples)) * sigma * np.sqrt(1.0 - beta**2)
         response = np.zeros((n, 3))  # the state's response to an initial attitude error
         response[PHI] = np.eye(3)
         velocity = np.zeros((len(plan.step_dt), 3, samples))
@@ -217,6 +222,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
         phi_cross = -np.einsum("ijs,kj->iks", d_dcm, dcm)  # [phi x] = -dC C^T
         phi0 = np.stack([phi_cross[2, 1], phi_cross[0, 2], phi_cross[1, 0]])
         total = velocity + np.einsum("kij,js->kis", v_align, phi0)
+        carried = (x.copy(), float(plan.start_time + plan.step_dt.sum()))
         rows = by_group.get(nav.group, [])
         for seg, axes in equation_segments(rec, nav.group, any(equations[i].segment == first_seg for i in rows)):
             steps = np.flatnonzero(plan.step_segment == seg.number)

@@ -151,13 +151,13 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
     linearised alignment (eq. 15), and the polynomial fits turn the velocities into coefficients.
     """
     from .errormodel import _alignment_jacobian
-    from .kalman import DV, PHI, NoiseSystem
+    from .kalman import ACC, DV, PHI, Layout, NoiseSystem
     from .nlp import ROTATION_STEP_S, Problem, plan_steps
 
     rng = np.random.default_rng(seed)
     model = noise.complete()
-    markov = model.gyro_bias_instability > 0 or model.accel_bias_instability > 0
-    n = 15 if markov else 9
+    layout = Layout.of(model)
+    markov, n = layout.markov, layout.n
     by_group: dict[int, list[int]] = {}
     for i, eq in enumerate(equations):
         by_group.setdefault(eq.group, []).append(i)
@@ -171,12 +171,12 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
         shell.groups, shell.events, shell.start_attitudes = [plan], [{}], {nav.group: nav.initial_attitude}
         track = shell.tracks(quats, True)[0]
         system = NoiseSystem([track], rec.site.g, rec.site.earth_rate)
-        phi, q = system._transitions(track, model, n)
+        phi, q = system._transitions(track, model, layout)
         x = np.zeros((n, samples))
         if markov:  # the biases wander on from the previous group (one process over the recording)
             start = float(plan.start_time)
-            for sl, sigma, tau in ((slice(9, 12), model.gyro_bias_instability, model.gyro_bias_tau),
-                                   (slice(12, 15), model.accel_bias_instability, model.accel_bias_tau)):
+            for sl, sigma, tau in ((layout.bg, model.gyro_bias_instability, model.gyro_bias_tau),
+                                   (layout.ba, model.accel_bias_instability, model.accel_bias_tau)):
                 beta = np.exp(-max(start - carried[1], 0.0) / tau) if carried else 0.0
                 previous = carried[0][sl] if carried else 0.0
                 x[sl] = beta * previous + rng.standard_normal((3, samples)) * sigma * np.sqrt(1.0 - beta**2)
@@ -199,7 +199,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
                 response = phi_run @ response
                 phi_run, q_run = np.eye(n), np.zeros((n, n))
             if plan.segment_start[k]:
-                x[6:9] = 0.0
+                x[ACC] = 0.0
             previous_phi = x[PHI].copy()
             x = phi[k] @ x + _psd_sqrt(q[k]) @ rng.standard_normal((n, samples))
             response = phi[k] @ response
@@ -208,7 +208,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
             if plan.step_segment[k] == first_seg:
                 f_cross_phi += system.f_cross @ (0.5 * (previous_phi + x[PHI])) * plan.step_dt[k]
                 last_first = k
-                gyro_sum = x[6:9].copy()
+                gyro_sum = x[ACC].copy()
         # the alignment (eq. 14) sees the first segment's mean noise: f_noise = C^T (dv - int f x phi) / T
         duration = float(plan.step_dt[plan.step_segment == first_seg].sum())
         c1 = track.attitude[last_first]

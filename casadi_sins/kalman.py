@@ -37,7 +37,39 @@ import numpy as np
 from .frames import skew
 from .noise import SensorNoise
 
-PHI, DV, ACC, BG, BA, UA = (slice(3 * k, 3 * k + 3) for k in range(6))
+PHI, DV, ACC, PM = (slice(3 * k, 3 * k + 3) for k in range(4))
+
+
+@dataclasses.dataclass(frozen=True)
+class Layout:
+    """The state vector: attitude, velocity, the segment's gyro angle and the attitude at the segment's
+    middle (always); Gauss-Markov biases and the unmodelled acceleration when the model has them."""
+
+    markov: bool
+    unmodelled: bool
+
+    @property
+    def bg(self) -> slice:
+        return slice(12, 15)
+
+    @property
+    def ba(self) -> slice:
+        return slice(15, 18)
+
+    @property
+    def ua(self) -> slice:
+        start = 18 if self.markov else 12
+        return slice(start, start + 3)
+
+    @property
+    def n(self) -> int:
+        return 12 + (6 if self.markov else 0) + (3 if self.unmodelled else 0)
+
+    @classmethod
+    def of(cls, noise: SensorNoise) -> "Layout":
+        noise = noise.complete()
+        return cls(noise.gyro_bias_instability > 0 or noise.accel_bias_instability > 0,
+                   noise.unmodelled_acceleration > 0)
 #: Floors of the observation noise (far below any sensor): velocity (m/s)^2, gyro mean (rad/s)^2.
 VELOCITY_FLOOR = 1e-20
 GYRO_FLOOR = 1e-30
@@ -65,6 +97,11 @@ class GroupTrack:
     events: dict[int, list[tuple]]
     segment_duration: dict[int, float]  # static segment index -> duration (s)
     segment_sway: dict[int, np.ndarray]  # static segment index -> variance added to its mean rate, (rad/s)^2
+    segment_mid_of: dict[int, int] = dataclasses.field(default_factory=dict)  # segment -> its middle step
+
+    @property
+    def segment_mid(self) -> set[int]:
+        return set(self.segment_mid_of.values())
 
     @property
     def end_time(self) -> float:
@@ -99,8 +136,9 @@ class NoiseSystem:
         self.rows = max((ev[1] + 3 for t in tracks for evs in t.events.values() for ev in evs), default=0)
 
     # ------------------------------------------------------------------ discretisation
-    def _transitions(self, track: GroupTrack, noise: SensorNoise, n: int):
+    def _transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """``Phi`` (M, n, n) and ``Q`` (M, n, n) of every step (exact for a constant attitude in the step)."""
+        n = layout.n
         h = track.step_dt
         c = track.attitude
         m = len(h)
@@ -123,11 +161,11 @@ class NoiseSystem:
         w0 = np.zeros((m, n, 3))
         w0[:, DV] = c
         q += (w0 * noise.accel_vrw**2) @ np.swapaxes(w0, 1, 2) * h1
-        if n > 15:  # unmodelled acceleration: constant within a static segment
-            phi[:, DV, UA] = eye3 * (h * track.static)[:, None, None]
-        if n > 9:
-            for sensor, sl, sigma, tau in (("gyro", BG, noise.gyro_bias_instability, noise.gyro_bias_tau),
-                                           ("accel", BA, noise.accel_bias_instability, noise.accel_bias_tau)):
+        if layout.unmodelled:  # unmodelled acceleration: constant within a static segment
+            phi[:, DV, layout.ua] = eye3 * (h * track.static)[:, None, None]
+        if layout.markov:
+            for sensor, sl, sigma, tau in (("gyro", layout.bg, noise.gyro_bias_instability, noise.gyro_bias_tau),
+                                           ("accel", layout.ba, noise.accel_bias_instability, noise.accel_bias_tau)):
                 beta = np.exp(-h / tau)
                 gamma1 = tau * (1.0 - beta)
                 gamma2 = tau * (h - gamma1)
@@ -168,14 +206,15 @@ class NoiseSystem:
         if columns.ndim == 1:
             columns = columns[:, None]
         out = np.zeros_like(columns)
-        markov = noise.gyro_bias_instability > 0 or noise.accel_bias_instability > 0
-        unmodelled = noise.unmodelled_acceleration > 0
-        n = 18 if unmodelled else 15 if markov else 9
+        layout = Layout.of(noise)
+        markov, unmodelled, n = layout.markov, layout.unmodelled, layout.n
+        BG, BA, UA = layout.bg, layout.ba, layout.ua  # noqa: N806 (state slices, named like the constants)
         x = np.zeros((n, columns.shape[1]))
         p = np.zeros((n, n))
         if markov:
             p[BG, BG] = np.eye(3) * noise.gyro_bias_instability**2
             p[BA, BA] = np.eye(3) * noise.accel_bias_instability**2
+        earth_cross = self.earth_cross
         q_a = noise.accel_quantization**2
         q_g = noise.gyro_quantization**2
         log_det = 0.0
@@ -190,13 +229,13 @@ class NoiseSystem:
                     p[:, sl] *= beta
                     p[sl, sl] += np.eye(3) * sigma**2 * (1.0 - beta**2)
             # a new group: attitude free (estimated), velocity zero up to the accelerometers' remainder
-            for sl in (PHI, DV, ACC, UA):
+            for sl in (PHI, DV, ACC, PM) + ((UA,) if unmodelled else ()):
                 x[sl] = 0.0
                 p[sl, :] = 0.0
                 p[:, sl] = 0.0
             c0 = track.attitude[0]
             p[DV, DV] = (c0 * q_a) @ c0.T
-            phi, q = self._transitions(track, noise, n)
+            phi, q = self._transitions(track, noise, layout)
             offset = np.zeros((3, columns.shape[1]))  # observed velocity of a free offset's reference
             free_pending = False
             for k in range(len(track.step_dt)):
@@ -212,6 +251,11 @@ class NoiseSystem:
                 free_pending |= bool(track.free_velocity[k])
                 x = phi[k] @ x
                 p = phi[k] @ p @ phi[k].T + q[k]
+                if k in track.segment_mid:  # keep the attitude error of the step whose attitude the gyro mean uses
+                    x[PM] = x[PHI]
+                    p[PM, :] = p[PHI, :]
+                    p[:, PM] = p[:, PHI]
+                    p[PM, PM] = p[PHI, PHI]
                 for event in track.events.get(k, ()):
                     if event[0] == "v":
                         row = event[1]
@@ -228,24 +272,28 @@ class NoiseSystem:
                             out[row:row + 3] = 0.0
                             free_pending = False
                             continue
-                        h_sel, scale = DV, 1.0
+                        h = np.zeros((3, n))
+                        h[:, DV] = np.eye(3)
                     else:
                         row, seg = event[1], event[2]
                         duration = track.segment_duration[seg]
                         r_obs = np.diag(2.0 * q_g / duration**2 + track.segment_sway.get(seg, 0.0)
                                         + noise.unmodelled_rate**2 + GYRO_FLOOR)
-                        h_sel, scale = ACC, 1.0 / duration
-                    ph = p[:, h_sel] * scale  # P H^T
-                    s = ph[h_sel] * scale + r_obs
+                        # mean rate - C_nav^T w_ie: the gyro angle over the duration, and the navigated
+                        # attitude's error at the middle turning the Earth rate (C^T [w_ie x] phi)
+                        h = np.zeros((3, n))
+                        h[:, ACC] = np.eye(3) / duration
+                        h[:, PM] = track.attitude[track.segment_mid_of[seg]].T @ earth_cross
+                    ph = p @ h.T  # P H^T
+                    s = h @ ph + r_obs
                     s = 0.5 * (s + s.T)
                     chol = np.linalg.cholesky(s)
-                    innovation = columns[row:row + 3] - (offset if event[0] == "v" else 0.0) - x[h_sel] * scale
+                    innovation = columns[row:row + 3] - (offset if event[0] == "v" else 0.0) - h @ x
                     out[row:row + 3] = np.linalg.solve(chol, innovation)
                     log_det += 2.0 * float(np.sum(np.log(np.diag(chol))))
                     gain = np.linalg.solve(s, ph.T).T  # P H^T S^-1
                     x = x + gain @ innovation
-                    i_kh = np.eye(n)
-                    i_kh[:, h_sel] -= gain * scale
+                    i_kh = np.eye(n) - gain @ h
                     p = i_kh @ p @ i_kh.T + gain @ r_obs @ gain.T
             previous_end = track.end_time
         return Whitened(out, log_det, self.rows)

@@ -101,6 +101,11 @@ class GroupSteps:
     observed_time: np.ndarray  # (K,) time of each observation, s
     segment_of: np.ndarray  # (K,) segment number of each observation
 
+    def middle_step(self, segment: int) -> int:
+        """The step whose end attitude a static segment's gyro mean compares the Earth rate in."""
+        steps = np.flatnonzero(self.step_segment == segment)
+        return int(steps[len(steps) // 2])
+
     @property
     def segment_start(self) -> np.ndarray:
         """(M,) True at the first step of each static segment."""
@@ -230,11 +235,11 @@ class Problem:
                 first_static = np.flatnonzero(seg_start)[:1]
                 free = seg_start.copy()
                 free[first_static] = False
-            durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum())
-                         for s in np.unique(plan.step_segment[plan.step_segment >= 0])}
+            numbers = np.unique(plan.step_segment[plan.step_segment >= 0])
+            durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum()) for s in numbers}
             tracks.append(GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0,
-                                     free, events, durations,
-                                     {s: sway[s] for s in durations if s in sway}))
+                                     free, events, durations, {s: sway[s] for s in durations if s in sway},
+                                     {int(s): plan.middle_step(int(s)) for s in numbers}))
         return tracks
 
     def start_attitudes_dcm(self, group: int) -> np.ndarray:
@@ -319,7 +324,7 @@ def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 cols = list(np.flatnonzero(in_seg))
                 duration = float(plan.step_dt[in_seg].sum())
                 mean_rate = ca.sum2(dtheta[:, cols]) / duration
-                mid = int(cols[len(cols) // 2])
+                mid = plan.middle_step(seg_number)
                 earth_in_body = quat_to_dcm(states[Q, mid]).T @ ca.DM(rec.site.earth_rate)
                 pieces.append(mean_rate - earth_in_body)
                 events[int(step)].append(("g", row, seg_number))

@@ -14,7 +14,7 @@ def one_segment(n_obs: int, dt: float = 1.0):
     events[n_obs - 1].append(("g", 3 * n_obs, 1))
     track = GroupTrack(0.0, np.full(n_obs, dt), np.tile(np.eye(3), (n_obs, 1, 1)),
                        np.r_[True, np.zeros(n_obs - 1, bool)], np.ones(n_obs, bool), np.zeros(n_obs, bool),
-                       events, {1: n_obs * dt}, {})
+                       events, {1: n_obs * dt}, {}, {1: n_obs // 2})
     return NoiseSystem([track], G, np.zeros(3))
 
 

@@ -297,17 +297,3 @@ class NoiseSystem:
                     p = i_kh @ p @ i_kh.T + gain @ r_obs @ gain.T
             previous_end = track.end_time
         return Whitened(out, log_det, self.rows)
-
-    def log_likelihood(self, residuals: np.ndarray, noise: SensorNoise, jacobian: np.ndarray | None = None) -> float:
-        """Gaussian log-likelihood of the residuals (restricted: with the Jacobian, the parameters'
-        degrees of freedom are taken out, REML)."""
-        cols = residuals[:, None] if jacobian is None else np.column_stack([residuals, jacobian])
-        white = self.whiten(cols, noise)
-        r = white.columns[:, 0]
-        value = -0.5 * (white.log_det + float(r @ r))
-        if jacobian is not None:
-            j = white.columns[:, 1:]
-            q, rr = np.linalg.qr(j)
-            r = r - q @ (q.T @ r)
-            value = -0.5 * (white.log_det + float(r @ r)) - float(np.sum(np.log(np.abs(np.diag(rr)))))
-        return value

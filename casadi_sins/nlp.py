@@ -227,7 +227,7 @@ class Problem:
             quats = trajectory[:, offset:offset + m]
             offset += m
             after = np.asarray(_quat_to_dcm_batch(quats))
-            before = np.concatenate([self.start_attitudes_dcm(plan.group)[None], after[:-1]])
+            before = np.concatenate([self.start_attitudes[plan.group][None], after[:-1]])
             attitude = 0.5 * (before + after)
             seg_start = plan.segment_start
             free = np.zeros(m, bool)
@@ -241,9 +241,6 @@ class Problem:
                                      free, events, durations, {s: sway[s] for s in durations if s in sway},
                                      {int(s): plan.middle_step(int(s)) for s in numbers}))
         return tracks
-
-    def start_attitudes_dcm(self, group: int) -> np.ndarray:
-        return self.start_attitudes[group]
 
 
 _QUAT_TO_DCM = None

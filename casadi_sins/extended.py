@@ -71,7 +71,7 @@ def static_rates(rec, reference: np.ndarray) -> np.ndarray:
     rate at rest turns with it: the previous segment's mean, rotated back by the angle turned since
     (the accumulated increments less the rate at rest: exact for turns about one axis).
     """
-    from .simulate import _exp_so3
+    from .frames import rotation_matrices
 
     dtheta_all, _ = P.compensate(rec.gyro, rec.accel, reference[: P.N_PARAMS], rec.dt)
     out = np.zeros((len(rec.time), 3))
@@ -89,7 +89,7 @@ def static_rates(rec, reference: np.ndarray) -> np.ndarray:
                 continue
             stop = sl.stop
             turned = np.cumsum(dtheta_all[cursor:stop] - rate * rec.dt, axis=0)
-            out[cursor:stop] = np.einsum("nji,j->ni", _exp_so3(turned), rate)
+            out[cursor:stop] = np.einsum("nji,j->ni", rotation_matrices(turned), rate)
             cursor = stop
         if cursor < span.stop:
             out[cursor:span.stop] = rate

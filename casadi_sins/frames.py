@@ -134,6 +134,19 @@ def small_rotation(rotvec: np.ndarray) -> np.ndarray:
     return rotation_matrix(rotvec, angle)
 
 
+def rotation_matrices(rotvec: np.ndarray) -> np.ndarray:
+    """Rotation matrices of rotation vectors, vectorised: (..., 3) -> (..., 3, 3) (Rodrigues, series near zero)."""
+    theta2 = np.sum(rotvec * rotvec, axis=-1)[..., None, None]
+    small = theta2 < 1e-12
+    theta = np.sqrt(np.where(small, 1.0, theta2))
+    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(theta) / theta)
+    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(theta)) / np.where(small, 1.0, theta2))
+    x, y, z = rotvec[..., 0], rotvec[..., 1], rotvec[..., 2]
+    zero = np.zeros_like(x)
+    k = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
 def rotation_vector(dcm: np.ndarray) -> np.ndarray:
     """Rotation vector (rad) of a rotation matrix (inverse of :func:`small_rotation`, angle < pi)."""
     dcm = np.asarray(dcm)

@@ -52,6 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import parameters as P
+from .errormodel import quat_to_dcm_batch
 from .frames import small_rotation
 from .initial import rough_parameters
 from .kalman import GroupTrack, NoiseSystem
@@ -226,7 +227,7 @@ class Problem:
             m = len(plan.step_dt)
             quats = trajectory[:, offset:offset + m]
             offset += m
-            after = np.asarray(_quat_to_dcm_batch(quats))
+            after = quat_to_dcm_batch(quats.T)
             before = np.concatenate([self.start_attitudes[plan.group][None], after[:-1]])
             attitude = 0.5 * (before + after)
             seg_start = plan.segment_start
@@ -241,19 +242,6 @@ class Problem:
                                      free, events, durations, {s: sway[s] for s in durations if s in sway},
                                      {int(s): plan.middle_step(int(s)) for s in numbers}))
         return tracks
-
-
-_QUAT_TO_DCM = None
-
-
-def _quat_to_dcm_batch(quats: np.ndarray) -> np.ndarray:
-    """(4, M) quaternions -> (M, 3, 3) DCMs, by the one CasADi expression mapped over columns."""
-    global _QUAT_TO_DCM
-    if _QUAT_TO_DCM is None:
-        q = ca.SX.sym("q", 4)
-        _QUAT_TO_DCM = ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm(q))])
-    flat = np.asarray(_QUAT_TO_DCM.map(quats.shape[1])(quats))
-    return flat.T.reshape(-1, 3, 3).transpose(0, 2, 1)  # vec() is column-major
 
 
 def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,

@@ -163,7 +163,7 @@ class Sway:
 
     def attitude(self, t: np.ndarray) -> np.ndarray:
         """``exp([s x])``, shape ``t.shape + (3, 3)``."""
-        return _exp_so3(self.angle(t))
+        return frames.rotation_matrices(self.angle(t))
 
     def rate(self, t: np.ndarray) -> np.ndarray:
         """Angular rate of the base in n (rad/s): ``J_l(s) s_dot`` (left Jacobian of SO(3))."""
@@ -175,19 +175,6 @@ class Sway:
         b = np.where(small, 1.0 / 6.0 - theta2 / 120.0, (theta - np.sin(theta)) / (theta * np.where(small, 1.0, theta2)))
         cross = np.cross(s, s_dot)
         return s_dot + a * cross + b * np.cross(s, cross)
-
-
-def _exp_so3(rotvec: np.ndarray) -> np.ndarray:
-    """Rotation matrices of rotation vectors (..., 3) -> (..., 3, 3) (Rodrigues, series near zero)."""
-    theta2 = np.sum(rotvec * rotvec, axis=-1)[..., None, None]
-    small = theta2 < 1e-12
-    theta = np.sqrt(np.where(small, 1.0, theta2))
-    a = np.where(small, 1.0 - theta2 / 6.0, np.sin(theta) / theta)
-    b = np.where(small, 0.5 - theta2 / 24.0, (1.0 - np.cos(theta)) / np.where(small, 1.0, theta2))
-    x, y, z = rotvec[..., 0], rotvec[..., 1], rotvec[..., 2]
-    zero = np.zeros_like(x)
-    k = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
-    return np.eye(3) + a * k + b * (k @ k)
 
 
 #: Sample pieces integrated at once by quadrature (bounds the memory of long recordings).

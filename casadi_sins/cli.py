@@ -182,6 +182,10 @@ def cmd_calibrate(args) -> int:
     print(natural_table(frame).to_string(index=False))
     print(f"{args.solver}: {result.iterations} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
           f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
+    sources = result.info.get("noise_sources") or {}
+    if "not modelled" in (sources.get("gyro_bias_instability"), sources.get("accel_bias_instability")):
+        print("note: bias instability is not modelled (no --noise datasheet): the bias sigmas exclude a drift "
+              "slower than this recording can show")
     for message in warnings:
         print(f"WARNING: {message}", file=sys.stderr)
     return 0

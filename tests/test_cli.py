@@ -57,5 +57,8 @@ def test_calibrate_writes_the_table_with_its_report_and_strict_refuses_on_a_warn
     assert report["noise"]["sources"]["accel_vrw"] == "raw data" and len(report["parameters"]) == 21
     assert "-5 ppm" in (tmp_path / "out" / "params.report.md").read_text()
     assert (tmp_path / "rep" / f"{kang_sim.recording.name}-nlp-residuals.png").stat().st_size > 10000
-    assert "WARNING" in capsys.readouterr().err
+    printed = capsys.readouterr()
+    assert "WARNING" in printed.err
+    assert "bias instability is not modelled" in printed.out  # no datasheet: said on screen and in the report
+    assert "Bias instability is not modelled" in (tmp_path / "out" / "params.report.md").read_text()
     assert P.read_table(out).sigma is not None

@@ -24,7 +24,7 @@ from . import __version__
 from . import parameters as P
 from .noise import SensorNoise, natural_noise_frame
 from .report import markdown_table
-from .units import ARCSEC, DEG, UG
+from .units import DEG_PER_H, UG
 
 
 def recording_hash(rec) -> str | None:
@@ -48,29 +48,12 @@ def recording_hash(rec) -> str | None:
     return digest.hexdigest()
 
 
-def natural_value(name: str, value: float) -> tuple[float, str]:
-    """A parameter's value in the unit an engineer reads (ug, deg/h, arcsec, arcsec/pulse, the extras'
-    natural units; accelerometer scale factors in SI)."""
-    if name.startswith("accel_bias"):
-        return value / UG, "ug"
-    if name.startswith("gyro_bias"):
-        return value / (DEG / 3600.0), "deg/h"
-    if name.startswith("gyro_scale"):
-        return value / ARCSEC, "arcsec/pulse"
-    if name.startswith("accel_scale"):
-        return value, "m/s/pulse"
-    group = P.extra_group_of(name)
-    if group is not None:
-        return value / group.natural_scale, group.natural_unit
-    return value / ARCSEC, "arcsec"
-
-
 def parameter_rows(params: P.ParameterSet, truth: P.ParameterSet | None = None) -> list[dict]:
     sigma = params.natural_sigma()
     errors = P.natural_errors(params, truth) if truth is not None else None
     rows = []
     for i, name in enumerate(params.names):
-        value, unit = natural_value(name, params.values[i])
+        value, unit = P.natural_value_of(name, params.values[i])
         row = {"parameter": name, "unit": P.unit_of(name), "value": float(params.values[i]),
                "sigma": None if params.sigma is None else float(params.sigma[i]),
                "value_natural": value, "value_unit": unit, "sigma_natural": float(sigma[i]),
@@ -101,7 +84,7 @@ def _noise_dict(noise: SensorNoise | None) -> dict | None:
     for key, value in noise.complete().natural().items():
         out[key] = value.tolist() if isinstance(value, np.ndarray) else float(value)
     out["unmodelled_acceleration_ug"] = noise.unmodelled_acceleration / UG
-    out["unmodelled_rate_deg_h"] = noise.unmodelled_rate / (DEG / 3600.0)
+    out["unmodelled_rate_deg_h"] = noise.unmodelled_rate / DEG_PER_H
     out["unmodelled_step_mm_s"] = noise.unmodelled_step * 1e3
     return out
 
@@ -245,7 +228,7 @@ def noise_plot(result, rec) -> bytes | None:
         dvs.append(dv_seg / rec.dt)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
     for ax, rates, white, unit, scale, label in (
-            (axes[0], dth, model.gyro_arw, "deg/h", DEG / 3600.0, "gyro"),
+            (axes[0], dth, model.gyro_arw, "deg/h", DEG_PER_H, "gyro"),
             (axes[1], dvs, model.accel_vrw, "ug", UG, "accelerometer")):
         tau, adev = allan_deviation(rates, rec.dt)
         for axis in range(3):
@@ -272,7 +255,7 @@ def report_files(result, rec, table_path: str | Path, report_dir: str | Path | N
                  truth: P.ParameterSet | None = None, command: str | None = None,
                  unit_id: str | None = None) -> dict[Path, bytes]:
     """Every file of a calibration's report, as ``{path: content}`` (written together by the caller)."""
-    from .report import frame_files
+    from .report import calibration_tables
 
     data = report_data(result, rec, truth, command, unit_id)
     json_path, md_path = companion_paths(table_path)
@@ -284,13 +267,7 @@ def report_files(result, rec, table_path: str | Path, report_dir: str | Path | N
         stem = f"{rec.file_stem}-{result.solver}"
         files[out / f"{stem}-report.md"] = text.encode()
         files[out / f"{stem}-report.json"] = files[json_path]
-        from .report import parameter_report
-
-        files.update(frame_files(result.history_frame(truth), out / f"{stem}-iterations",
-                                 f"{rec.name}: {result.solver} per iteration (errors in natural units)", "%.8g"))
-        files.update(frame_files(parameter_report(result, truth), out / f"{stem}-parameters",
-                                 f"{rec.name}: {result.solver} calibration ({result.iterations} iterations, "
-                                 f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g"))
+        files.update(calibration_tables(result, out / stem, rec.name, truth))
         files[out / f"{stem}-residuals.png"] = residual_plot(result, rec)
         allan = noise_plot(result, rec)
         if allan is not None:

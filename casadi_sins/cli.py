@@ -195,9 +195,9 @@ def natural_table(frame):
     """The terminal table: values and sigma in natural units (SI stays in the CSV)."""
     import pandas as pd
 
-    from .calibration_report import natural_value
+    from .parameters import natural_value_of
 
-    values = [natural_value(name, value) for name, value in zip(frame["parameter"], frame["value"])]
+    values = [natural_value_of(name, value) for name, value in zip(frame["parameter"], frame["value"])]
     out = pd.DataFrame({"parameter": frame["parameter"],
                         "value": [f"{v:.9g}" if u == "m/s/pulse" else f"{v:.6g}" for v, u in values],
                         "unit": [u for _, u in values],

@@ -152,7 +152,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
     """
     from .errormodel import _alignment_jacobian
     from .kalman import ACC, DV, PHI, Layout, NoiseSystem
-    from .nlp import ROTATION_STEP_S, Problem, plan_steps
+    from .nlp import ROTATION_STEP_S, group_track, plan_steps
 
     rng = np.random.default_rng(seed)
     model = noise.complete()
@@ -167,11 +167,9 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs, equations: lis
         plan = plan_steps(rec, nav.group, 1.0, ROTATION_STEP_S)
         stops = np.cumsum(np.round(plan.step_dt / rec.dt).astype(int)) - 1
         quats = nav.quaternion[stops].T
-        shell = Problem.__new__(Problem)
-        shell.groups, shell.events, shell.start_attitudes = [plan], [{}], {nav.group: nav.initial_attitude}
-        track = shell.tracks(quats, True)[0]
+        track = group_track(plan, {}, nav.initial_attitude, quats, True)
         system = NoiseSystem([track], rec.site.g, rec.site.earth_rate)
-        phi, q = system._transitions(track, model, layout)
+        phi, q = system.transitions(track, model, layout)
         x = np.zeros((n, samples))
         if markov:  # the biases wander on from the previous group (one process over the recording)
             start = float(plan.start_time)

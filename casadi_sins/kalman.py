@@ -136,7 +136,7 @@ class NoiseSystem:
         self.rows = max((ev[1] + 3 for t in tracks for evs in t.events.values() for ev in evs), default=0)
 
     # ------------------------------------------------------------------ discretisation
-    def _transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
+    def transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """``Phi`` (M, n, n) and ``Q`` (M, n, n) of every step (exact for a constant attitude in the step)."""
         n = layout.n
         h = track.step_dt
@@ -235,7 +235,7 @@ class NoiseSystem:
                 p[:, sl] = 0.0
             c0 = track.attitude[0]
             p[DV, DV] = (c0 * q_a) @ c0.T
-            phi, q = self._transitions(track, noise, layout)
+            phi, q = self.transitions(track, noise, layout)
             offset = np.zeros((3, columns.shape[1]))  # observed velocity of a free offset's reference
             free_pending = False
             for k in range(len(track.step_dt)):

@@ -225,23 +225,31 @@ class Problem:
         tracks, offset = [], 0
         for plan, events in zip(self.groups, self.events):
             m = len(plan.step_dt)
-            quats = trajectory[:, offset:offset + m]
+            tracks.append(group_track(plan, events, self.start_attitudes[plan.group],
+                                      trajectory[:, offset:offset + m], use_rotation_steps, sway))
             offset += m
-            after = quat_to_dcm_batch(quats.T)
-            before = np.concatenate([self.start_attitudes[plan.group][None], after[:-1]])
-            attitude = 0.5 * (before + after)
-            seg_start = plan.segment_start
-            free = np.zeros(m, bool)
-            if not use_rotation_steps:
-                first_static = np.flatnonzero(seg_start)[:1]
-                free = seg_start.copy()
-                free[first_static] = False
-            numbers = np.unique(plan.step_segment[plan.step_segment >= 0])
-            durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum()) for s in numbers}
-            tracks.append(GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0,
-                                     free, events, durations, {s: sway[s] for s in durations if s in sway},
-                                     {int(s): plan.middle_step(int(s)) for s in numbers}))
         return tracks
+
+
+def group_track(plan: GroupSteps, events: dict, start_attitude: np.ndarray, quats: np.ndarray,
+                use_rotation_steps: bool, sway: dict | None = None) -> GroupTrack:
+    """The noise model's view of one group: its steps along the navigated attitude (quaternions at
+    every step end, ``(4, M)``), the observations at each step, and the sway of its static segments."""
+    sway = sway or {}
+    after = quat_to_dcm_batch(quats.T)
+    before = np.concatenate([start_attitude[None], after[:-1]])
+    attitude = 0.5 * (before + after)
+    seg_start = plan.segment_start
+    free = np.zeros(len(plan.step_dt), bool)
+    if not use_rotation_steps:
+        first_static = np.flatnonzero(seg_start)[:1]
+        free = seg_start.copy()
+        free[first_static] = False
+    numbers = np.unique(plan.step_segment[plan.step_segment >= 0])
+    durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum()) for s in numbers}
+    return GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0, free, events,
+                      durations, {s: sway[s] for s in durations if s in sway},
+                      {int(s): plan.middle_step(int(s)) for s in numbers})
 
 
 def build_problem(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
@@ -447,13 +455,6 @@ def default_observation_spacing(rec: Recording) -> float:
     durations = [s.end - s.start for s in rec.static_segments]
     typical = float(np.median(durations)) if durations else 0.0
     return base * max(1.0, float(np.ceil(typical / (OBSERVATIONS_PER_SEGMENT * base))))
-
-
-default_static_block = default_observation_spacing  # the name used before observation and step were separate
-
-
-#: Parameter models of :func:`calibrate_nlp`: the paper's 21, every extra group, or those the data support.
-MODEL_CHOICES = ("21", "extended", "auto")
 
 
 def model_groups(model) -> tuple[str, ...]:

@@ -175,6 +175,16 @@ def scale_mask_of(names) -> np.ndarray:
     return np.array(["_scale_" in n for n in names])
 
 
+def natural_value_of(name: str, value: float) -> tuple[float, str]:
+    """A parameter's *value* in the unit an engineer reads: the natural unit of its error, except scale
+    factors, whose value is a pulse weight (gyro arcsec/pulse, accelerometer m/s/pulse)."""
+    if name.startswith("gyro_scale"):
+        return value / ARCSEC, "arcsec/pulse"
+    if name.startswith("accel_scale"):
+        return value, "m/s/pulse"
+    return value / float(natural_scale_of([name])[0]), natural_unit_of(name)
+
+
 # --------------------------------------------------------------------------- model
 def sensor_matrices(p):
     """``(K_a, S_a, B_a, K_g, S_g, B_g)`` of a parameter vector (CasADi or NumPy, SI).

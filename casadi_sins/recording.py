@@ -373,7 +373,7 @@ def _raise_encoding_error(data_path: Path):
 
 #: Beyond these no navigation-grade unit measures and no turntable moves: rad/s and m/s^2.
 MAX_RATE = np.radians(2000.0)
-MAX_SPECIFIC_FORCE = 100.0 * 9.80665
+MAX_SPECIFIC_FORCE = 100.0 * frames.G0
 
 
 def check_physical_range(rec: "Recording", data_path) -> None:
@@ -398,7 +398,7 @@ def check_physical_range(rec: "Recording", data_path) -> None:
         beyond = values > limit
         if beyond.any():
             row, col = np.argwhere(beyond)[0]
-            shown = values[row, col] / (np.radians(1.0) if unit == "deg/s" else 9.80665)
+            shown = values[row, col] / (np.radians(1.0) if unit == "deg/s" else frames.G0)
             raise RecordingError(f"{data_path}, line {row + 2}, column {columns[col]}: {pulses[row, col]:.6g} pulses "
                                  f"would be about {shown:.3g} {unit}: not a physical measurement (a lost decimal "
                                  "point?)")

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from . import parameters as P
-from .io import atomic_write_bytes
+from .io import atomic_write_bytes, write_files
 from .recording import Recording
 from .strapdown import GroupNavigation, static_velocities
 
@@ -52,8 +52,7 @@ def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
 
 def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g"):
     """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically)."""
-    for path, content in frame_files(frame, stem, title, float_format).items():
-        atomic_write_bytes(path, content)
+    write_files(frame_files(frame, stem, title, float_format))
 
 
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:
@@ -112,11 +111,6 @@ def plot_navigation(rec: Recording, runs: dict[str, list[GroupNavigation]], path
     return save_figure(fig, path)
 
 
-def natural_sigma(params: P.ParameterSet) -> np.ndarray:
-    """1-sigma of each parameter in the natural unit of its error (scale factors relative, ppm)."""
-    return params.natural_sigma()
-
-
 def parameter_report(result, truth: P.ParameterSet | None = None) -> pd.DataFrame:
     """The calibrated parameters with sigma in natural units (and errors against a truth)."""
     params = result.parameters
@@ -130,14 +124,13 @@ def parameter_report(result, truth: P.ParameterSet | None = None) -> pd.DataFram
     return frame
 
 
-def write_calibration_report(result, out_dir: str | Path, name: str, truth: P.ParameterSet | None = None):
-    """Per-iteration table (the paper's Table 2 layout) and the parameter report, CSV + Markdown."""
-    out_dir = Path(out_dir)
-    stem = f"{name}-{result.solver}"
-    write_frame(result.history_frame(truth), out_dir / f"{stem}-iterations",
-                f"{name}: {result.solver} per iteration (errors in natural units)", float_format="%.8g")
-    write_frame(parameter_report(result, truth), out_dir / f"{stem}-parameters",
-                f"{name}: {result.solver} calibration ({result.iterations} iterations, "
-                f"{result.wall_time:.2f} s, residual rms {result.residual_rms:.3g}). sigma: {result.sigma_meaning}",
-                float_format="%.6g")
-    return out_dir
+def calibration_tables(result, stem: str | Path, name: str, truth: P.ParameterSet | None = None
+                       ) -> dict[Path, bytes]:
+    """Per-iteration table (the paper's Table 2 layout) and the parameter report of the recording
+    ``name``, CSV + Markdown, as ``{path: content}`` (``stem-iterations.*``, ``stem-parameters.*``)."""
+    files = frame_files(result.history_frame(truth), f"{stem}-iterations",
+                        f"{name}: {result.solver} per iteration (errors in natural units)", "%.8g")
+    files.update(frame_files(parameter_report(result, truth), f"{stem}-parameters",
+                             f"{name}: {result.solver} calibration ({result.iterations} iterations, "
+                             f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g"))
+    return files

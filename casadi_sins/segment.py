@@ -31,6 +31,7 @@ import numpy as np
 
 from . import frames
 from .recording import Recording, RecordingError, Segment, Site, validate_schedule
+from .strapdown import alignment_function
 
 #: Seconds of smoothing of the rate magnitude, and the shortest rest that counts as a static segment.
 SMOOTH_S = 0.05
@@ -206,15 +207,13 @@ def _turn(pulses: np.ndarray, size: np.ndarray) -> tuple[str, float] | None:
 
 
 def _orientation(force: np.ndarray, rate: np.ndarray) -> str | None:
-    """Letters of a static attitude: up from gravity, north from the Earth rate's horizontal part."""
-    up = force / np.linalg.norm(force)
-    horizontal = rate - (rate @ up) * up
-    if np.linalg.norm(horizontal) == 0.0:
+    """Letters of a static attitude: the coarse alignment (up from gravity, north from the Earth rate's
+    horizontal part), to the nearest letters."""
+    attitude = np.asarray(alignment_function()(force, rate))
+    if not np.all(np.isfinite(attitude)):  # no horizontal Earth rate: no heading
         return None
-    north = horizontal / np.linalg.norm(horizontal)
-    east = np.cross(north, up)
     try:
-        return frames.dcm_to_orientation(np.vstack([east, north, up]), tol_deg=30.0)
+        return frames.dcm_to_orientation(attitude, tol_deg=30.0)
     except frames.OrientationError:
         return None
 

@@ -19,9 +19,8 @@ def test_prediction_matches_the_nlp_sigma_of_a_noisy_run(kang_prediction, kang_s
     """The predicted sigma (no data) is what the NLP reports from data, within the noise of its
     noise-level estimate (the accelerometer level from ~3600 residuals, the gyro level from 36)."""
     from casadi_sins.nlp import calibrate_nlp
-    from casadi_sins.report import natural_sigma
 
-    from_data = natural_sigma(calibrate_nlp(kang_sim.recording).parameters)
+    from_data = calibrate_nlp(kang_sim.recording).parameters.natural_sigma()
     ratio = from_data / kang_prediction.sigma_natural
     accel = np.r_[P.ACCEL_BIAS, P.ACCEL_SCALE, P.ACCEL_MISALIGN]
     np.testing.assert_allclose(ratio[accel], 1.0, atol=0.1)

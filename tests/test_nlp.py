@@ -14,7 +14,6 @@ from casadi_sins import parameters as P
 from casadi_sins.cli import main
 from casadi_sins.nlp import calibrate_nlp
 from casadi_sins.recording import write_recording
-from casadi_sins.report import natural_sigma
 from casadi_sins.result import CalibrationError
 from casadi_sins.simulate import simulate
 
@@ -36,7 +35,7 @@ def nlp_result(kang_sim):
 
 def test_recovers_the_truth_with_honest_sigma(nlp_result, kang_sim):
     err = assert_within(nlp_result.parameters.values, kang_sim.truth.values)
-    z = err / natural_sigma(nlp_result.parameters)
+    z = err / nlp_result.parameters.natural_sigma()
     assert np.abs(z).max() < 4.5
     assert 0.6 < np.sqrt(np.mean(z**2)) < 1.5
     assert nlp_result.info["rotation_steps_used"] and not nlp_result.info["warnings"]
@@ -82,7 +81,7 @@ def test_peer_model_mismatch_is_flagged_and_its_sigma_stays_honest(peer_recordin
     assert "not explained by the 21-parameter model" in warnings and not result.info["rotation_steps_used"]
     assert "errors outside the model were added" in warnings
     err = P.natural_errors(result.parameters.values, peer_truth.values)
-    assert np.abs(err / natural_sigma(result.parameters)).max() <= 4.5
+    assert np.abs(err / result.parameters.natural_sigma()).max() <= 4.5
     # and no deviation beyond what the extras document predicts for a slope-based fit (its column B)
     assert np.all(np.abs(err) <= np.abs(PEER_EXPECTED_B) + 1.0), np.round(err, 2)
 
@@ -124,7 +123,7 @@ def test_integer_pulse_counters_keep_accuracy_and_honest_sigma(kang_problem):
     sim = simulate(kang_problem.with_changes(quantize=True), seed=2)
     result = calibrate_nlp(sim.recording)
     err = assert_within(result.parameters.values, sim.truth.values)
-    z = err / natural_sigma(result.parameters)
+    z = err / result.parameters.natural_sigma()
     assert np.abs(z).max() < 4.5 and np.sqrt(np.mean(z**2)) < 1.6
     # the raw data cannot show the white noise under pulses 70x larger: the fit sets it (the sawtooth of
     # the pulse remainders is only roughly white, and the fit gives part of it to the white noise)
@@ -141,7 +140,7 @@ def test_navigation_grade_noise_keeps_the_sigma_honest(kang_problem):
     is in benchmarks/bench_noise.py; here one seed and loose bounds)."""
     sim = simulate(kang_problem.with_changes(**REALISTIC), seed=4)
     result = calibrate_nlp(sim.recording)
-    z = P.natural_errors(result.parameters.values, sim.truth.values) / natural_sigma(result.parameters)
+    z = P.natural_errors(result.parameters.values, sim.truth.values) / result.parameters.natural_sigma()
     assert np.abs(z).max() < 4.5 and 0.4 < np.sqrt(np.mean(z**2)) < 1.6
     assert not result.info["warnings"] and result.info["noise_sources"]["gyro_arw"] == "raw data"
     assert all(check.passed for check in result.info["checks"])
@@ -155,6 +154,6 @@ def test_a_swaying_base_is_named_and_the_sigma_covers_the_errors(kang_problem):
     assert any("sway" in w for w in result.info["warnings"]) and result.info["static_step_s"] < 1.0
     err = assert_within(result.parameters.values, sim.truth.values,
                         {"ug": 1.0, "ppm": 1.5, "arcsec": 0.8, "deg/h": 0.01})
-    assert np.abs(err / natural_sigma(result.parameters)).max() < 4.5
+    assert np.abs(err / result.parameters.natural_sigma()).max() < 4.5
     with pytest.raises(CalibrationError, match=r"the base moved \(sway\).*use the nlp solver"):
         calibrate_ils(sim.recording)

@@ -15,15 +15,16 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pandas as pd
+from casadi_sins.core import orientation
+from casadi_sins.data.problem import load_problem
+from casadi_sins.model import registry as R
+from casadi_sins.nav.free_inertial import navigate_free
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+from casadi_sins.studies.budget import error_budget
+from casadi_sins.studies.navcheck import navigation_problem
+from casadi_sins.studies.prediction import predict_problem
 
-from casadi_sins import frames
-from casadi_sins import parameters as P
-from casadi_sins.analysis import predict_problem
-from casadi_sins.budget import error_budget
-from casadi_sins.navcheck import navigate_free, navigation_problem
-from casadi_sins.problem import load_problem
-from casadi_sins.report import write_frame
-from casadi_sins.simulate import simulate
 
 
 def one_run(args):
@@ -35,10 +36,10 @@ def one_run(args):
     rng = np.random.default_rng(seed + 777)
     cov = covariance
     if only is not None:
-        mask = np.zeros(P.N_PARAMS, bool)
+        mask = np.zeros(R.N_PARAMS, bool)
         mask[only] = True
         cov = covariance * np.outer(mask, mask)
-    delta = rng.multivariate_normal(np.zeros(P.N_PARAMS), cov)
+    delta = rng.multivariate_normal(np.zeros(R.N_PARAMS), cov)
     run = navigate_free(sim.recording, sim.truth.values + delta, 300.0, "mc")
     return run.north_m[-1], run.east_m[-1]
 
@@ -52,13 +53,13 @@ def main():
     pred = predict_problem(problem)
     cov, nominal = pred.nominal.covariance, pred.nominal.values
     dev = problem.deviations
-    budget = error_budget(cov, nominal, frames.orientation_to_dcm("ENU"), problem.site.latitude, 0.0,
+    budget = error_budget(cov, nominal, orientation.orientation_to_dcm("ENU"), problem.site.latitude, 0.0,
                           problem.site.g, dev.accel_noise_ug, dev.gyro_noise_deg_h, problem.rate_hz,
                           duration_s=3600.0)
     rows = []
     t0 = time.perf_counter()
     for label, only, predicted in (("total", None, budget.total[-1]),
-                                   ("residual gyro bias alone", P.GYRO_BIAS,
+                                   ("residual gyro bias alone", R.GYRO_BIAS,
                                     budget.contributions["residual gyro bias"][-1])):
         with ProcessPoolExecutor(2) as pool:
             ends = np.array(list(pool.map(one_run, [(s, cov, only) for s in range(args.runs)])))

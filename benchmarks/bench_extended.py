@@ -18,12 +18,16 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from casadi_sins.calibrate import calibrate_nlp
+from casadi_sins.data.description import read_recording
+from casadi_sins.data.problem import load_problem
+from casadi_sins.data.tables import read_table
+from casadi_sins.model import registry as R
+from casadi_sins.model.parameters import natural_errors
+from casadi_sins.report.tables import write_frame
+from casadi_sins.studies import montecarlo as MC
+from casadi_sins.studies.prediction import predict_problem
 
-from casadi_sins import montecarlo as MC
-from casadi_sins import parameters as P
-from casadi_sins.analysis import predict_problem
-from casadi_sins.problem import load_problem
-from casadi_sins.report import write_frame
 
 ROOT = Path(__file__).resolve().parents[1]
 PEER = ROOT.parent / "shared" / "peer" / "psins-19pos"
@@ -34,7 +38,7 @@ def selection(problem, seeds, workers) -> pd.DataFrame:
     ok = rows[rows["failed"] == ""]
     kept = ok.groupby("seed")["parameter"].apply(set)
     out = []
-    for key, group in P.EXTRA_GROUPS.items():
+    for key, group in ((k, R.GROUPS[k]) for k in R.EXTRA_GROUPS):
         share = float(np.mean([group.names[0] in names for names in kept]))
         out.append({"unit": problem.name, "group": key, "kept in runs": share, "runs": len(kept)})
     return pd.DataFrame(out)
@@ -60,8 +64,8 @@ def main():
     write_frame(table, f"{args.out}/extended-montecarlo",
                 f"{args.runs} seeds: the extended model on a unit with Ka2, lever arms and a 1 ms offset "
                 "(extended-kang2013) against the 21-parameter fit of the paper's unit, same seeds and noise")
-    core = table[table["parameter"].isin(P.NAMES)]
-    extra = table[~table["parameter"].isin(P.NAMES)]
+    core = table[table["parameter"].isin(R.NAMES)]
+    extra = table[~table["parameter"].isin(R.NAMES)]
     print(f"21 parameters: RMS over the plain unit's {core['rms_ratio'].min():.2f}-{core['rms_ratio'].max():.2f} "
           f"(target <= 1.2); RMS/sigma {core['rms_over_sigma'].min():.2f}-{core['rms_over_sigma'].max():.2f}")
     print(f"extras: RMS/sigma {extra['rms_over_sigma'].min():.2f}-{extra['rms_over_sigma'].max():.2f} "
@@ -85,19 +89,17 @@ def main():
                 "ug/g^2) against the rotation time of the paper's schedule: a 1 cm lever arm needs sigma << 10 mm")
     print(predicted.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     if (PEER / "psins-19pos.toml").exists():
-        from casadi_sins.nlp import calibrate_nlp
-        from casadi_sins.recording import read_recording
 
         rec = read_recording(PEER / "psins-19pos.toml")
-        truth = P.read_table(PEER / "psins-19pos.truth.csv")
+        truth = read_table(PEER / "psins-19pos.truth.csv")
         t0 = time.perf_counter()
         result = calibrate_nlp(rec, model="extended")
         params = result.parameters
         peer = pd.DataFrame({"parameter": params.names, "natural unit": params.natural_units,
-                             "value (natural)": params.values / np.where(P.scale_mask_of(params.names), 1.0,
-                                                                         P.natural_scale_of(params.names)),
+                             "value (natural)": params.values / np.where(R.relative_mask(params.names), 1.0,
+                                                                         R.natural_scale_of(params.names)),
                              "error against the 21 truth (natural)": np.where(
-                                 np.isin(params.names, P.NAMES), P.natural_errors(params, truth), np.nan),
+                                 np.isin(params.names, R.NAMES), natural_errors(params, truth), np.nan),
                              "sigma (natural)": params.natural_sigma()})
         write_frame(peer, f"{args.out}/extended-peer", f"psins-19pos with --model extended ({time.perf_counter() - t0:.0f} s); "
                     "extras in our sign: k2 = -Ka2 (10/20/30 PSINS ug/g^2 = 10.03/20.05/30.08 ours), levers = -r "

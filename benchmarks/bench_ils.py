@@ -11,12 +11,12 @@ import argparse
 import time
 
 import pandas as pd
+from casadi_sins.calibrate import calibrate_ils
+from casadi_sins.data.problem import load_problem
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+from casadi_sins.studies import montecarlo as MC
 
-from casadi_sins import montecarlo as MC
-from casadi_sins.ils import calibrate_ils
-from casadi_sins.problem import load_problem
-from casadi_sins.report import write_frame
-from casadi_sins.simulate import simulate
 
 
 def main():
@@ -31,7 +31,7 @@ def main():
         t0 = time.perf_counter()
         res = calibrate_ils(rec)
         times.append(time.perf_counter() - t0)
-    print(f"ils on {rec.name}: {res.iterations} iterations, best {min(times):.2f} s of 3 "
+    print(f"ils on {rec.name}: {res.nit} iterations, best {min(times):.2f} s of 3 "
           f"(ratio to the 5 s target {min(times) / 5:.2f})")
     t0 = time.perf_counter()
     rows = MC.run(problem, range(1000, 1000 + args.seeds), ("ils",),

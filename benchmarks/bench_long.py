@@ -17,6 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from casadi_sins.data.problem import load_problem
+from casadi_sins.data.tables import read_table
+from casadi_sins.model.parameters import natural_errors
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate, write_simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,10 +31,6 @@ def main():
     parser.add_argument("--out", default=str(ROOT / "results"))
     parser.add_argument("--runs", default=str(ROOT / "runs" / "long"))
     args = parser.parse_args()
-    from casadi_sins import parameters as P
-    from casadi_sins.problem import load_problem
-    from casadi_sins.report import write_frame
-    from casadi_sins.simulate import simulate, write_simulation
 
     problem = load_problem(ROOT / "problems" / "long-10h-400hz.toml")
     runs = Path(args.runs)
@@ -46,9 +47,9 @@ def main():
     peak_gb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1e6
     if done.returncode:
         raise SystemExit(done.stderr)
-    result = P.read_table(table)
-    truth = P.read_table(runs / f"{problem.name}-seed1.truth.csv")
-    z = P.natural_errors(result, truth) / result.natural_sigma()
+    result = read_table(table)
+    truth = read_table(runs / f"{problem.name}-seed1.truth.csv")
+    z = natural_errors(result, truth) / result.natural_sigma()
     samples = int(round(problem.duration * problem.rate_hz))
     frame = pd.DataFrame([{"samples": samples, "hours": problem.duration / 3600, "rate (Hz)": problem.rate_hz,
                            "wall time (s)": wall, "peak memory (GB)": peak_gb, "target time (s)": 120,

@@ -10,9 +10,9 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from casadi_sins.data.problem import load_problem
+from casadi_sins.studies import montecarlo as MC
 
-from casadi_sins import montecarlo as MC
-from casadi_sins.problem import load_problem
 
 
 def main():

@@ -9,11 +9,12 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from casadi_sins.data.problem import load_problem
+from casadi_sins.model.output import compensate
+from casadi_sins.nav.navigation import navigate
+from casadi_sins.nav.strapdown import chain_function
+from casadi_sins.sim import simulate
 
-from casadi_sins import parameters as P
-from casadi_sins.problem import load_problem
-from casadi_sins.simulate import simulate
-from casadi_sins.strapdown import chain_function, navigate
 
 
 def best_of(fn, repeats=5):
@@ -36,7 +37,7 @@ def main():
     navigate(rec, params)  # first pass includes building the chained Function
     t_first = time.perf_counter() - t0
     t_nav = best_of(lambda: navigate(rec, params))
-    t_comp = best_of(lambda: P.compensate(rec.gyro, rec.accel, params, rec.dt))
+    t_comp = best_of(lambda: compensate(rec.gyro, rec.accel, params, rec.dt))
     n = rec.group_samples(1).stop - rec.group_samples(1).start
     x0 = np.zeros(13)
     x0[0] = 1.0

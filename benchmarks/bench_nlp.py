@@ -21,16 +21,18 @@ import time
 
 import numpy as np
 import pandas as pd
+from casadi_sins.calibrate import calibrate_ils, calibrate_nlp
+from casadi_sins.calibrate.initial import rough_parameters
+from casadi_sins.calibrate.nlp.graph import build_graph, natural_to_parameters
+from casadi_sins.calibrate.nlp.ipopt import quick_weights
+from casadi_sins.data.problem import load_problem
+from casadi_sins.model import registry as R
+from casadi_sins.model.parameters import natural_errors
+from casadi_sins.noise.plan import plan_noise
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+from casadi_sins.studies import montecarlo as MC
 
-from casadi_sins import montecarlo as MC
-from casadi_sins import parameters as P
-from casadi_sins.ils import calibrate_ils
-from casadi_sins.initial import rough_parameters
-from casadi_sins.nlp import build_problem, calibrate_nlp, natural_to_parameters, quick_weights
-from casadi_sins.noise import plan_noise
-from casadi_sins.problem import load_problem
-from casadi_sins.report import write_frame
-from casadi_sins.simulate import simulate
 
 
 def timed(fn, repeats=3):
@@ -43,14 +45,14 @@ def timed(fn, repeats=3):
 
 
 def max_natural_error(values, truth):
-    return float(np.abs(P.natural_errors(values, truth)).max())
+    return float(np.abs(natural_errors(values, truth)).max())
 
 
 def section_timing(problem, out):
     sim = simulate(problem, seed=1)
     t_nlp, res = timed(lambda: calibrate_nlp(sim.recording))
     t_ils, _ = timed(lambda: calibrate_ils(sim.recording))
-    print(f"timing: nlp {t_nlp:.2f} s (graph {res.info['build_time']:.2f} s, {res.iterations} Ipopt iterations), "
+    print(f"timing: nlp {t_nlp:.2f} s (graph {res.timings['graph']:.2f} s, {res.nit} Ipopt iterations), "
           f"ils {t_ils:.2f} s; nlp/ils {t_nlp / t_ils:.2f} (target <= 2), nlp/3 s target {t_nlp / 3:.2f}")
     return {"nlp_s": t_nlp, "ils_s": t_ils}
 
@@ -61,8 +63,8 @@ def section_hessian(problem, out):
     for hessian in ("gauss-newton", "exact", "limited-memory"):
         try:
             t, res = timed(lambda: calibrate_nlp(sim.recording, hessian=hessian, use_rotation_steps=True), 1)
-            err = P.natural_errors(res.parameters.values, sim.truth.values)
-            rows.append({"hessian": hessian, "time (s)": t, "ipopt iterations": res.iterations,
+            err = natural_errors(res.parameters.values, sim.truth.values)
+            rows.append({"hessian": hessian, "time (s)": t, "ipopt iterations": res.nit,
                          "max |error| (natural)": np.abs(err).max(), "rms error (natural)": np.sqrt(np.mean(err**2))})
         except Exception as exc:  # report, do not stop the benchmark
             rows.append({"hessian": hessian, "time (s)": np.nan, "ipopt iterations": np.nan,
@@ -85,7 +87,7 @@ def section_scaling(problem, out):
         t_nlp, res = timed(lambda: calibrate_nlp(sim.recording), 1)
         t_ils, _ = timed(lambda: calibrate_ils(sim.recording), 1)
         rows.append({"recording": label, "samples": len(sim.recording.time), "nlp (s)": t_nlp,
-                     "nlp graph (s)": res.info["build_time"], "ils (s)": t_ils, "nlp/ils": t_nlp / t_ils})
+                     "nlp graph (s)": res.timings["graph"], "ils (s)": t_ils, "nlp/ils": t_nlp / t_ils})
         print(rows[-1])
     frame = pd.DataFrame(rows)
     frame["nlp / nlp(100 Hz, 1x)"] = frame["nlp (s)"] / frame["nlp (s)"].iloc[0]
@@ -102,11 +104,11 @@ def section_baseline(problem, out):
 
     def baseline():
         reference = rough_parameters(rec).values
-        built = build_problem(rec, reference)
+        built = build_graph(rec, reference)
         weights = quick_weights(built, plan_noise(rec, reference).model, rec.dt, True)  # the NLP's stage-1 weights
         fun = lambda z: weights @ np.asarray(built.residuals(z)).ravel()  # noqa: E731
         sol = least_squares(fun, np.zeros(built.n_variables), jac="2-point", method="trf", x_scale=1.0)
-        return natural_to_parameters(sol.x[: P.N_PARAMS], reference), sol
+        return natural_to_parameters(sol.x[: R.N_PARAMS], reference), sol
 
     t_base, (values, sol) = timed(baseline, 1)
     print(f"baseline: scipy least_squares (2-point Jacobian over the compiled CasADi navigation) {t_base:.2f} s, "
@@ -124,9 +126,9 @@ def section_blocks(problem, out):
     for block in (1, 2, 4, 5, 10):
         t, res = timed(lambda: calibrate_nlp(sim.recording, rotation_step_s=block / sim.recording.rate_hz,
                                              use_rotation_steps=True), 1)
-        err = P.natural_errors(res.parameters.values, sim.truth.values)
+        err = natural_errors(res.parameters.values, sim.truth.values)
         rows.append({"rotation step (samples)": block, "time (s)": t, "max |error| (natural)": np.abs(err).max(),
-                     "worst parameter": P.NAMES[int(np.argmax(np.abs(err)))]})
+                     "worst parameter": R.NAMES[int(np.argmax(np.abs(err)))]})
     frame = pd.DataFrame(rows)
     print(frame.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     write_frame(frame, f"{out}/nlp-rotation-blocks",

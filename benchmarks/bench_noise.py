@@ -24,13 +24,14 @@ import time
 
 import numpy as np
 import pandas as pd
+from casadi_sins.calibrate.initial import rough_parameters
+from casadi_sins.data.problem import load_problem
+from casadi_sins.noise.raw import estimate_sensor_noise
+from casadi_sins.report.plots import save_figure
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+from casadi_sins.studies import montecarlo as MC
 
-from casadi_sins import montecarlo as MC
-from casadi_sins.initial import rough_parameters
-from casadi_sins.noise import estimate_sensor_noise
-from casadi_sins.problem import load_problem
-from casadi_sins.report import save_figure, write_frame
-from casadi_sins.simulate import simulate
 
 REALISTIC = dict(accel_noise_ug=0.0, gyro_noise_deg_h=0.0, accel_vrw_ug_rthz=15.0, gyro_arw_deg_rth=0.002)
 MARKOV = dict(REALISTIC, gyro_bias_instability_deg_h=0.002, gyro_bias_tau_s=600.0, accel_bias_instability_ug=3.0,

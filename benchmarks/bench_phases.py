@@ -17,14 +17,19 @@ from pathlib import Path
 
 import pandas as pd
 
+from casadi_sins.data.description import write_recording
+from casadi_sins.data.problem import load_problem
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+
 CHILD = r"""
 import json, sys, time
 t0 = time.perf_counter()
-from casadi_sins.recording import read_recording
-from casadi_sins.solvers import calibrate
-from casadi_sins.calibration_report import report_files
-from casadi_sins.parameters import table_text
-from casadi_sins.io import write_files
+from casadi_sins.calibrate import calibrate
+from casadi_sins.core.files import write_files
+from casadi_sins.data.description import read_recording
+from casadi_sins.data.tables import table_text
+from casadi_sins.report.calibration import report_files
 t1 = time.perf_counter()
 rec = read_recording(sys.argv[1])
 t2 = time.perf_counter()
@@ -35,7 +40,7 @@ files.update(report_files(result, rec, sys.argv[3]))
 write_files(files)
 t4 = time.perf_counter()
 out = {"import": t1 - t0, "read": t2 - t1, "calibrate": t3 - t2, "write": t4 - t3, "total": t4 - t0}
-out.update(result.info.get("timings", {}))
+out.update(result.timings)
 print(json.dumps(out))
 """
 
@@ -55,9 +60,6 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "results"))
     args = parser.parse_args()
-    from casadi_sins.problem import load_problem
-    from casadi_sins.recording import write_recording
-    from casadi_sins.simulate import simulate
 
     with tempfile.TemporaryDirectory() as tmp:
         path = write_recording(simulate(load_problem(), seed=1).recording, Path(tmp) / "kang2013-seed1.toml")
@@ -70,7 +72,6 @@ def main():
     frame = pd.DataFrame(rows)
     ratio = frame.loc[0, "total"] / frame.loc[1, "total"]
     print(f"NLP / ILS, whole process: {ratio:.2f}")
-    from casadi_sins.report import write_frame
 
     write_frame(frame, f"{args.out}/main-job-phases", "The paper's recording -> table and report, one core, best of "
                 f"{args.repeats} fresh processes (s); NLP / ILS {ratio:.2f}")

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import argparse
 import time
+from casadi_sins.data.problem import load_problem
+from casadi_sins.studies.sweep import start_attitude_sweep, write_sweep
 
-from casadi_sins.problem import load_problem
-from casadi_sins.sweep import start_attitude_sweep, write_sweep
 
 
 def main():

@@ -1,4 +1,8 @@
-"""Shared fixtures: the paper's problem, simulations of it, and the peer recording."""
+"""Shared fixtures: the paper's problem, simulations of it, their calibrations, and the peer recording.
+
+The expensive ones (a full calibration takes seconds) are computed once per session and shared by
+every test that only reads them.
+"""
 
 from __future__ import annotations
 
@@ -7,15 +11,20 @@ from pathlib import Path
 
 import pytest
 
-from casadi_sins.problem import load_problem
-from casadi_sins.recording import read_recording
-from casadi_sins.simulate import simulate
+from casadi_sins.calibrate import calibrate_ils, calibrate_nlp
+from casadi_sins.data.description import read_recording
+from casadi_sins.data.problem import load_problem
+from casadi_sins.data.tables import read_table
+from casadi_sins.sim import simulate
 
-PEER = Path(__file__).resolve().parents[1].parent / "shared" / "peer" / "psins-19pos"
+#: The PSINS 19-position recording, converted to our format (see its README).
+PEER = Path(__file__).resolve().parent / "fixtures" / "psins-19pos"
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
 
 @pytest.fixture(scope="session")
 def kang_problem():
+    """The paper's experiment (problems/kang2013.toml)."""
     return load_problem()
 
 
@@ -34,19 +43,29 @@ def kang_sim(kang_problem):
 
 @pytest.fixture(scope="session")
 def kang_sim_noiseless(kang_problem):
+    """The paper's experiment without sensor noise, seed 5."""
     return simulate(kang_problem, seed=5, noise=False)
 
 
 @pytest.fixture(scope="session")
+def kang_nlp(kang_sim):
+    """The NLP's calibration of :func:`kang_sim` (read-only)."""
+    return calibrate_nlp(kang_sim.recording)
+
+
+@pytest.fixture(scope="session")
+def kang_ils(kang_sim):
+    """The ILS's calibration of :func:`kang_sim` (read-only)."""
+    return calibrate_ils(kang_sim.recording)
+
+
+@pytest.fixture(scope="session")
 def peer_recording():
-    path = PEER / "psins-19pos.toml"
-    if not path.exists():
-        pytest.skip("shared/peer/psins-19pos is not beside this checkout")
-    return read_recording(path)
+    """The PSINS 19-position recording."""
+    return read_recording(PEER / "psins-19pos.toml")
 
 
 @pytest.fixture(scope="session")
 def peer_truth():
-    from casadi_sins.parameters import read_table
-
+    """Its truth: the 21-parameter part of the generator's errors."""
     return read_table(PEER / "psins-19pos.truth.csv")

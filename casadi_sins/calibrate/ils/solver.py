@@ -1,0 +1,186 @@
+"""The paper's reference solver: iterative linear least squares (Kang et al. 2013, section 1).
+
+Each iteration:
+
+1. navigate every group from its coarse alignment (eq. 14) with the current
+   parameters;
+2. in the static segment after each rotation, fit the north and east
+   velocity errors with ``a + b tau + c tau^2`` and the up velocity error with
+   ``a + b tau`` (``tau`` from the start of the segment); the linear and
+   quadratic coefficients (north quadratic optional) are the equations,
+   5 per rotation, 45 for the paper's 9 rotations; by default also the slope
+   of the up velocity in each group's alignment segment, which the paper
+   leaves unused (48 equations; ``paper_equations=True`` for exactly 45);
+3. the same fits applied to the sensitivities of the velocity error to the
+   21 error terms (``T_g, eps, T_a, Delta``), propagated through the linear
+   error model (eqs. 13-21) along the navigated attitude with the alignment
+   errors of eq. 15 (:mod:`nav.errormodel`), give the design matrix;
+4. weighted least squares for the 21 errors, then the output model is
+   corrected with eqs. 22-25, and the whole is repeated until every
+   correction is below ``tolerance`` times its own sigma, or below
+   :data:`ABSOLUTE_TOLERANCE` in natural units.
+
+Weights: the noise of the equations is correlated across segments (the gyro noise tilts the whole
+group's navigation, the coarse alignment carries the noise of its segment into every later one, bias
+instability ties the recording together).  Their covariance under the sensor noise model (measured
+in the raw data; the state-space model of :mod:`noise.kalman`, :mod:`.covariance`) weights a generalised least
+squares, and ``sigma`` is its formal standard error, inflated by the residual variance factor only
+when that exceeds its chi-square limit (48 - 21 = 27 degrees of freedom for the paper's schedule).
+On a swaying base the method refuses: the coarse alignment assumes a still one.
+"""
+
+
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from ...data.recording import Recording
+from ...model.noise import SensorNoise
+from ...model.output import apply_error_estimate
+from ...model.parameters import ParameterSet
+from ...model.registry import N_PARAMS, NAMES, NATURAL_SCALE, NATURAL_UNITS, SCALE_MASK
+from ...noise.motion import describe_motion
+from ...noise.plan import NoisePlan, plan_noise
+from ..initial import rough_parameters
+from ..limits import factor_limit
+from ..result import CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
+from .covariance import equation_covariance
+from .equations import build_equations, solve_equations
+
+#: Corrections below these (natural units: ug, ppm, arcsec, deg/h) end the iteration regardless of sigma.
+ABSOLUTE_TOLERANCE = np.where(np.isin(np.array(NATURAL_UNITS), ["deg/h"]), 1e-5, 1e-3)
+
+#: The longest group the ILS takes: it holds per-sample sensitivities (21 per axis) and navigation states.
+MAX_GROUP_SAMPLES = 1_500_000
+
+SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
+                 "from the sensor noise model (raw-data estimate or datasheet), times the variance factor when "
+                 "the residuals exceed it")
+
+
+def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_iterations: int = 10,
+                  tolerance: float = 0.01, north_quadratic: bool = True, paper_equations: bool = False,
+                  progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
+                  allow_base_motion: bool = False, model: str = "21") -> CalibrationResult:
+    """Calibrate a recording with the paper's iterative least squares.
+
+    Parameters
+    ----------
+    rec : Recording
+    initial : ParameterSet, optional
+        Starting values; default the paper's rough initial values (section 1.3).
+    max_iterations : int
+        Iteration cap (the paper needs 3; 4 with the confirming one).
+    tolerance : float
+        Stop when every correction is below ``tolerance`` times its sigma.
+    north_quadratic : bool
+        Use the north quadratic term (the paper allows leaving it out).
+    paper_equations : bool
+        Exactly the paper's 5 equations per rotation; by default the up-velocity slope of each
+        group's alignment segment is added (see :func:`equations.build_equations`).
+    progress : callable, optional
+        Receives one line per iteration.
+    noise : SensorNoise, optional
+        Datasheet noise terms; the others are measured in the raw data (:func:`noise.plan.plan_noise`).
+    allow_base_motion : bool
+        Calibrate although the base sways (the result is then unreliable: see below).
+    model : "21"
+        The ILS fits the paper's 21 parameters only: its equations are slopes and curvatures of the
+        static velocity, which do not see the steps across rotations where lever arms and a time
+        offset act; the extra terms need the NLP (``model="extended"`` or ``"auto"``).
+
+    Raises
+    ------
+    CalibrationError
+        When the base sways (the paper's coarse alignment needs a still base: a sway of 20 arcsec
+        turns the aligned heading by degrees and tilts it by the sway's amplitude, which the method
+        takes for sensor errors), the equations are rank deficient or the iteration does not converge.
+    """
+    _check_applicable(rec, model)
+    t_start = time.perf_counter()
+    initial = initial or rough_parameters(rec)
+    params = initial.core.copy()
+    noise_plan = plan_noise(rec, params, noise)
+    warnings = list(rec.warnings) + _base_motion_warning(noise_plan, allow_base_motion)
+    history = [params.copy()]
+    corrections = []
+    covariance = None
+    for iteration in range(1, max_iterations + 1):
+        a, b, equations, navs = build_equations(rec, params, north_quadratic, alignment_up=not paper_equations)
+        if covariance is None:  # the attitudes barely change between iterations
+            covariance = equation_covariance(rec, params, navs, equations, noise_plan.model, north_quadratic)
+        x, cov, factor = solve_equations(a, b, covariance)
+        params = apply_error_estimate(params, x)
+        history.append(params.copy())
+        sigma = np.sqrt(np.diag(cov))
+        ratio = np.abs(x) / np.where(sigma > 0, sigma, np.inf)
+        corrections.append(x / NATURAL_SCALE)
+        if progress:
+            worst = int(np.argmax(ratio))
+            progress(f"ils iteration {iteration}: {len(b)} equations, largest correction {NAMES[worst]} "
+                     f"{x[worst] / NATURAL_SCALE[worst]:+.4g} {NATURAL_UNITS[worst]} ({ratio[worst]:.3g} sigma), "
+                     f"variance factor {factor:.3g}")
+        if not np.all(np.isfinite(params)):
+            raise CalibrationError(f"iteration {iteration} produced non-finite parameters")
+        if np.all((ratio < tolerance) | (np.abs(x) / NATURAL_SCALE < ABSOLUTE_TOLERANCE)):
+            break
+    else:
+        raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
+                               f"(last corrections up to {np.max(ratio):.3g} sigma)")
+    inflate = _variance_factor(factor, len(b) - N_PARAMS, warnings)
+    result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
+    status, message = outcome(warnings, iteration)
+    return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
+                             float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, [],
+                             inflate, NoiseReport(noise_plan.model, noise_plan.raw, None, dict(noise_plan.source)),
+                             noise_plan.motions,
+                             ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
+
+
+def _check_applicable(rec: Recording, model) -> None:
+    """Refuse what the paper's method cannot do: the extended model, groups too long to hold in memory."""
+    if model not in ("21", None, ()):
+        raise CalibrationError("the ILS (the paper's method) fits the 21 parameters only: its slopes and curvatures "
+                               "of the static velocity do not see the velocity steps across rotations where lever "
+                               "arms and a time offset act; use the nlp solver for the extended model")
+    longest = max(rec.group_samples(g).stop - rec.group_samples(g).start for g in rec.group_ids)
+    if longest > MAX_GROUP_SAMPLES:
+        raise CalibrationError(f"a group of {longest} samples: the ILS keeps the error model's sensitivities of every "
+                               f"sample (about 5 kB each), more than {MAX_GROUP_SAMPLES} samples would need "
+                               f"{longest * 5e3 / 1e9:.0f} GB; the nlp solver handles long files")
+
+
+def _base_motion_warning(noise_plan: NoisePlan, allow_base_motion: bool) -> list[str]:
+    """A swaying base: refuse (the coarse alignment needs a still one), or warn when allowed."""
+    motion = describe_motion(noise_plan.motions)
+    if not motion:
+        return []
+    if not allow_base_motion:
+        raise CalibrationError(f"{motion}; the paper's method aligns each group on a still base and would take the "
+                               "sway for sensor errors: use the nlp solver, which estimates the start attitudes and "
+                               "models the sway")
+    return [f"{motion}: the paper's method assumes a still base; this table is unreliable"]
+
+
+def _variance_factor(factor: float, dof: int, warnings: list[str]) -> float:
+    """The factor applied to the covariance: the equations' own, only beyond its chi-square limit.
+
+    White noise the raw data could not show (coarse pulses) stays at its upper bound: conservative.
+    Scaling it by the equations' own variance factor (27 degrees of freedom) was measured to be
+    overconfident in 4 of 50 runs (beyond 4.5 sigma), the bound is not.
+    """
+    if factor <= factor_limit(dof):
+        return 1.0
+    warnings.append(f"the equations' residuals are {np.sqrt(factor):.3g} times the sensor noise ({dof} degrees "
+                    f"of freedom): errors outside the model; sigma inflated by {np.sqrt(factor):.3g}")
+    return factor
+
+
+def _covariance_of_values(params: np.ndarray, error_cov: np.ndarray) -> np.ndarray:
+    """Covariance of the parameter values from that of the error terms (scale: S = S_hat/(1+t))."""
+    jac = np.ones(N_PARAMS)
+    jac[SCALE_MASK] = -params[SCALE_MASK]
+    return error_cov * np.outer(jac, jac)

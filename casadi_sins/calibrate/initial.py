@@ -1,0 +1,85 @@
+"""The paper's rough initial values (section 1.3), computed from the recording itself.
+
+* Accelerometer scale factors from the 1 g reference of the static positions:
+  in every static segment ``|diag(S_a) n_bar| = g dt`` for the mean pulses
+  per sample ``n_bar``; with ``u_i = S_i^2`` this is linear,
+  ``sum_i n_bar_i^2 u_i = (g dt)^2``, and is solved by least squares over
+  all static segments (insensitive to the positions' deviations from nominal).
+* Gyro scale factors from the 90 deg reference of the rotations: the pulses
+  accumulated over a rotation about axis i, less the static rate of the
+  segment before it (Earth rate plus bias: the rotation-axis component of
+  Earth rate does not change while turning about that axis), correspond to
+  the nominal angle.  Averaged over the rotations about each axis.  An axis
+  that is never turned falls back to the Earth-rate magnitude of the static
+  segments.
+* ``K = I``, ``B = 0``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from ..core.earth import EARTH_RATE
+from ..core.errors import InputError
+from ..core.orientation import parse_axis
+from ..data.recording import Recording
+from ..model.parameters import ParameterSet
+from ..model.registry import ACCEL_SCALE, GYRO_SCALE, N_PARAMS
+
+
+def _static_means(rec: Recording, pulses: np.ndarray) -> np.ndarray:
+    return np.array([pulses[rec.segment_samples(s)].mean(axis=0) for s in rec.static_segments])
+
+
+def _magnitude_scale(means: np.ndarray, magnitude: float, what: str, rec: Recording) -> np.ndarray:
+    """Scale factors ``S`` with ``|S * n_bar_k| = magnitude`` in the least-squares sense."""
+    design = means**2
+    strength = np.abs(means).max(axis=0)
+    weak = strength < 0.2 * strength.max()
+    if weak.any():
+        axes = ", ".join("xyz"[i] for i in np.flatnonzero(weak))
+        raise InputError(rec.label, f"the {what} axis {axes} never sees a large reference in any static "
+                             "segment; its scale factor cannot be set from this schedule")
+    u, *_ = np.linalg.lstsq(design, np.full(len(means), magnitude**2), rcond=None)
+    if (u <= 0).any():
+        raise InputError(rec.label, f"the static segments give no consistent {what} scale factor")
+    return np.sqrt(u)
+
+
+def rough_parameters(rec: Recording) -> ParameterSet:
+    """The paper's rough initial values from a recording (section 1.3)."""
+    dt = rec.dt
+    values = np.zeros(N_PARAMS)
+    values[ACCEL_SCALE] = _magnitude_scale(_static_means(rec, rec.accel), rec.site.g * dt, "accelerometer", rec)
+
+    estimates: list[list[float]] = [[], [], []]
+    for group in rec.group_ids:
+        segs = rec.group_segments(group)
+        for before, rotation in zip(segs[0::2], segs[1::2]):
+            axis = parse_axis(rotation.axis)
+            i = int(np.argmax(np.abs(axis)))
+            samples = rec.segment_samples(rotation)
+            static_rate = rec.gyro[rec.segment_samples(before), i].mean()
+            net = rec.gyro[samples, i].sum() - static_rate * (samples.stop - samples.start)
+            if net == 0.0:
+                raise InputError(rec.label, f"{rotation.describe()} shows no rotation on gyro {'xyz'[i]}")
+            estimates[i].append(math.radians(abs(rotation.angle_deg)) / abs(net))
+    missing = [i for i in range(3) if not estimates[i]]
+    gyro_scale = np.array([np.mean(e) if e else np.nan for e in estimates])
+    if missing:
+        warnings.warn(f"{rec.label}: no rotation about gyro axis {', '.join('xyz'[i] for i in missing)}; "
+                      "its rough scale factor comes from the Earth-rate magnitude (about 1 % accurate)",
+                      stacklevel=2)
+        means = _static_means(rec, rec.gyro)
+        known = np.nansum((means * np.nan_to_num(gyro_scale)) ** 2, axis=1)
+        rest = (EARTH_RATE * dt) ** 2 - known
+        for i in missing:
+            weight = means[:, i] ** 2
+            gyro_scale[i] = math.sqrt(max(np.sum(rest * weight) / np.sum(weight**2), 0.0)) or np.nan
+        if np.isnan(gyro_scale).any():
+            raise InputError(rec.label, "gyro scale factors cannot be set from this schedule")
+    values[GYRO_SCALE] = gyro_scale
+    return ParameterSet(values)

@@ -1,0 +1,168 @@
+"""Stage 2 of the estimator: generalised least squares under the full noise model.
+
+Gauss-Newton steps on the Kalman-whitened residuals and Jacobian (:mod:`noise.kalman`: angle and
+velocity random walk, the gyro noise shared by the gyro means and the velocity, pulse quantization,
+bias instability, base sway), re-linearised, with a line search outside the linear region; every
+step is reported.  ``sigma`` is ``(J_w^T J_w)^-1`` at the final point.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ...data.recording import Recording
+from ...model.noise import SensorNoise
+from ...noise.kalman import NoiseSystem
+from ...noise.observations import ObservationKind
+from ...noise.plan import NoisePlan
+from ..result import CalibrationError
+from .graph import ResidualGraph
+from .ipopt import check_rank, quick_weights, solve_ipopt
+from .likelihood import estimate_free_terms
+
+#: A step this small (in sigma) is taken as the last: the next is smaller by a factor ~1e-4 x step
+#: (measured: steps of 2.2, 0.11 and 20 sigma were followed by 0.001, 6e-7 and 0.017), so the residuals
+#: are updated linearly instead of evaluating the graph again.
+GLS_LINEAR_STEP = 0.5
+GLS_MAX_STEPS = 6
+#: Steps above this (sigma) move the attitudes enough to rebuild the noise model along them.
+GLS_RELINEARISE_NOISE = 0.3
+
+
+@dataclasses.dataclass
+class Fit:
+    """A finished fit: the solution, the whitened problem at it, and how it got there.
+
+    Attributes
+    ----------
+    z : ndarray
+        Decision vector (natural units: parameters, then start attitudes in arcsec).
+    noise : SensorNoise
+        The noise model the residuals were whitened with.
+    whitened_residuals, whitened_jacobian : ndarray
+    residuals, jacobian : ndarray
+        Unwhitened, linearised at ``z``.
+    leverage : ndarray
+        Diagonal of the hat matrix of each whitened row.
+    left_singular_vectors : ndarray
+        ``U`` of the whitened Jacobian.
+    covariance_natural : ndarray
+        ``(J_w^T J_w)^-1`` of the decision vector.
+    gls_steps : list of float
+        Largest step of each Gauss-Newton iteration, in sigma.
+    rotation_step_ratio : float
+        Mean square of the whitened residuals after rotations over that of the others.
+    use_rotation_steps : bool
+    system : NoiseSystem
+    ipopt_stats : dict
+    """
+
+    z: np.ndarray
+    noise: SensorNoise
+    whitened_residuals: np.ndarray
+    whitened_jacobian: np.ndarray
+    residuals: np.ndarray
+    jacobian: np.ndarray
+    leverage: np.ndarray
+    left_singular_vectors: np.ndarray
+    covariance_natural: np.ndarray
+    gls_steps: list[float]
+    rotation_step_ratio: float
+    use_rotation_steps: bool
+    system: NoiseSystem
+    ipopt_stats: dict = dataclasses.field(default_factory=dict)
+
+
+def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
+              tolerance: float, max_iterations: int, progress) -> Fit:
+    """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model).
+
+    Raises
+    ------
+    CalibrationError
+        Ipopt did not converge (naming the unobservable variables when the Jacobian is rank deficient).
+    KeyboardInterrupt
+        Ctrl-C inside Ipopt.
+    """
+    weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+    z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress)
+    if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
+        raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
+    if not stats["success"]:
+        # a rank deficiency is the likelier cause: name it
+        check_rank(np.asarray(graph.jacobian(z)[1]), graph.variable_names())
+        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} after {stats['iter_count']} "
+                               f"iterations (the cap is {max_iterations}: --max-iterations)")
+    fit = generalised_least_squares(rec, graph, noise_plan, dataclasses.replace(noise_plan.model), z,
+                                    use_rotation_steps, progress)
+    fit.ipopt_stats = stats
+    return fit
+
+
+def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, model: SensorNoise,
+                              z: np.ndarray, use_rotation_steps: bool, progress, update_free: bool = True) -> Fit:
+    """Gauss-Newton on the Kalman-whitened residuals from ``z`` until a step is in the linear region.
+
+    With ``update_free`` the noise terms the raw data did not determine are set by restricted maximum
+    likelihood at the first linearisation (:func:`likelihood.estimate_free_terms`).
+    """
+    gls_steps: list[float] = []
+    system = None
+    for _ in range(GLS_MAX_STEPS):
+        r, jac = (np.asarray(m) for m in graph.jacobian(z))
+        r = r.ravel()
+        if system is None or gls_steps[-1] > GLS_RELINEARISE_NOISE:  # the attitudes barely move near the answer
+            system = NoiseSystem(graph.tracks(np.asarray(graph.trajectory(z)), use_rotation_steps,
+                                              noise_plan.motions), rec.site.g, rec.site.earth_rate)
+        white = system.whiten(np.column_stack([r, jac]), model).columns
+        rw, jw = white[:, 0], white[:, 1:]
+        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        check_rank(jw, graph.variable_names(), (u, s, vt))
+        step = -vt.T @ ((u.T @ rw) / s)
+        sigma = np.sqrt(np.sum((vt.T / s) ** 2, axis=1))
+        if np.max(np.abs(step) / sigma) > 1.0:  # outside the linear region a full step may overshoot
+            step = line_search(graph, system, model, z, step, float(rw @ rw))
+        gls_steps.append(float(np.max(np.abs(step) / sigma)))
+        z = z + step
+        rw = rw + jw @ step
+        if update_free and any(noise_plan.free_terms().values()):
+            # the terms the raw data did not determine, once, at the first linearisation; then solve again
+            model = estimate_free_terms(model, noise_plan, system, np.column_stack([r + jac @ step, jac]))
+            update_free = False
+            continue
+        if gls_steps[-1] < GLS_LINEAR_STEP:
+            break
+    if progress:
+        progress("nlp: generalised least squares under the noise model, steps of "
+                 + ", ".join(f"{s:.3g}" for s in gls_steps) + " sigma")
+    return Fit(z, model, rw, jw, r + jac @ step, jac, np.sum(u**2, axis=1), u, (vt.T / s**2) @ vt, gls_steps,
+               rotation_step_ratio(graph, rw, use_rotation_steps), use_rotation_steps, system)
+
+
+def rotation_step_ratio(graph: ResidualGraph, rw: np.ndarray, use_rotation_steps: bool) -> float:
+    """Mean square of the whitened velocity residuals just after rotations over that of the others (1 when
+    the steps across rotations are not used)."""
+    table = graph.observations
+    velocity = table.rows_of(ObservationKind.VELOCITY)
+    steps = table.after_rotation & velocity
+    plain = velocity & ~steps & ~table.first_of_group
+    if use_rotation_steps and steps.any() and plain.any():
+        return float(np.mean(rw[steps] ** 2) / np.mean(rw[plain] ** 2))
+    return 1.0
+
+
+def line_search(graph: ResidualGraph, system: NoiseSystem, model: SensorNoise, z: np.ndarray, step: np.ndarray,
+                 cost: float, halvings: int = 8) -> np.ndarray:
+    """The Gauss-Newton step, halved until the whitened cost does not grow (far from the linear region:
+    residuals much larger than the noise model, as with unmodelled errors)."""
+    for _ in range(halvings):
+        if np.max(np.abs(step)) < 1e-9:
+            return step
+        trial = np.asarray(graph.residuals(z + step)).ravel()
+        new_cost = float(np.sum(system.whiten(trial, model).columns ** 2))
+        if new_cost <= cost * (1.0 + 1e-9) + 1e-12:
+            return step
+        step = step / 2.0
+    return np.zeros_like(step)

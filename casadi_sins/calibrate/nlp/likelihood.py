@@ -1,0 +1,104 @@
+"""Noise levels from a fit: restricted maximum likelihood through the Kalman filter.
+
+Terms the raw data did not determine (white noise hidden under coarse pulses) and the errors outside
+the model (when a fit's checks fail) take the values that maximise the restricted likelihood of the
+fit's residuals, linearised at its solution: the filter gives ``log det Sigma`` and the whitened
+residuals, the parameters are profiled out and their degrees of freedom taken off (REML).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ...model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
+from ...noise.kalman import NoiseSystem
+from ...noise.observations import ObservationKind, ObservationTable
+from ...noise.plan import NoisePlan
+
+#: Search ranges of the unmodelled terms: acceleration (m/s^2), rate (rad/s).
+UNMODELLED_ACCELERATION_RANGE = (1e-8, 1e-2)
+UNMODELLED_RATE_RANGE = (1e-12, 1e-5)
+UNMODELLED_STEP_RANGE = (1e-7, 1.0)
+
+
+def restricted_likelihood(system: NoiseSystem, columns: np.ndarray, model: SensorNoise) -> float:
+    """Negative restricted log-likelihood of residuals linearised at a fit (``columns`` = [r, J]).
+
+    The Kalman filter gives ``log det Sigma`` and the whitened columns; the parameters are profiled out
+    (generalised least squares) and their degrees of freedom taken off (REML).
+    """
+    white = system.whiten(columns, model)
+    rw, jw = white.columns[:, 0], white.columns[:, 1:]
+    q, rr = np.linalg.qr(jw)
+    rest = rw - q @ (q.T @ rw)
+    return 0.5 * (white.log_det + float(rest @ rest)) + float(np.sum(np.log(np.abs(np.diag(rr)))))
+
+
+def estimate_terms(system: NoiseSystem, columns: np.ndarray, base: SensorNoise,
+                   terms: dict[str, tuple[float, float, float]]) -> SensorNoise:
+    """Noise terms by restricted maximum likelihood (Nelder-Mead in log scale).
+
+    ``terms`` maps a :class:`SensorNoise` field to ``(start, low, high)``; per-axis fields are scaled as a
+    whole (their shape across axes is kept from ``base`` where it is not zero).
+    """
+    names = list(terms)
+    shapes = {}
+    for name in names:
+        value = np.asarray(getattr(base, name), dtype=float)
+        shapes[name] = value / value.max() if value.ndim and value.max() > 0 else np.ones(value.shape)
+
+    def model_of(theta):
+        out = dataclasses.replace(base)
+        for name, t in zip(names, theta):
+            level = float(np.exp(t))
+            setattr(out, name, shapes[name] * level if np.ndim(getattr(base, name)) else level)
+        return out
+
+    start = [np.log(np.clip(terms[n][0], terms[n][1], terms[n][2])) for n in names]
+    bounds = [(np.log(terms[n][1]), np.log(terms[n][2])) for n in names]
+    result = minimize(lambda t: restricted_likelihood(system, columns, model_of(t)), start, method="Nelder-Mead",
+                      bounds=bounds, options={"xatol": 0.03, "fatol": 0.05, "maxfev": 40 * len(names)})
+    return model_of(result.x)
+
+
+def estimate_unmodelled(observations: ObservationTable, residuals: np.ndarray, jacobian: np.ndarray,
+                        system: NoiseSystem, noise: SensorNoise, use_rotation_steps: bool) -> SensorNoise:
+    """Variances of the errors outside the model, by restricted maximum likelihood at a fit.
+
+    The terms (an acceleration constant in each static segment, a rate on each static gyro mean, a
+    velocity error at each rotation when its step is used) take the share of the misfit that the data
+    assign to them, and the relative weight of velocity and gyro residuals follows.  ``residuals`` and
+    ``jacobian`` are the fit's, linearised at its solution.
+    """
+    r = residuals
+    velocity = observations.rows_of(ObservationKind.VELOCITY)
+    gyro = observations.rows_of(ObservationKind.GYRO_MEAN)
+    start_acc = np.sqrt(np.mean(r[velocity] ** 2)) / 100.0  # a slope of the residuals' size per 100 s
+    start_rate = np.sqrt(np.mean(r[gyro] ** 2)) if gyro.any() else 1e-9
+    terms = {"unmodelled_acceleration": (start_acc, *UNMODELLED_ACCELERATION_RANGE),
+             "unmodelled_rate": (start_rate, *UNMODELLED_RATE_RANGE)}
+    if use_rotation_steps:
+        terms["unmodelled_step"] = (1e-4, *UNMODELLED_STEP_RANGE)
+    return estimate_terms(system, np.column_stack([r, jacobian]), noise, terms)
+
+
+def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: NoiseSystem,
+                         columns: np.ndarray) -> SensorNoise:
+    """The white-noise terms the raw data did not determine (coarse pulses hide them), by restricted
+    maximum likelihood between the floors and the raw data's upper bounds; with the accelerometers'
+    white noise also their quantization, which the sawtooth of coarse pulses makes only roughly white."""
+    free = [t for terms in noise_plan.free_terms().values() for t in terms]
+    bounds = noise_plan.raw.upper_bounds()
+    ranges = {"gyro_arw": (GYRO_ARW_FLOOR, max(float(bounds.gyro_arw.max()), GYRO_ARW_FLOOR * 10)),
+              "accel_vrw": (ACCEL_VRW_FLOOR, max(float(bounds.accel_vrw.max()), ACCEL_VRW_FLOOR * 10))}
+    model = dataclasses.replace(model)
+    for t in free:  # no shape across axes is known: one level for the three
+        setattr(model, t, np.full(3, float(np.median(getattr(model, t)))))
+    terms = {t: (float(np.max(getattr(model, t))), *ranges[t]) for t in free}
+    if "accel_vrw" in free and np.max(model.accel_quantization) > 0:
+        q = float(np.max(model.accel_quantization))
+        terms["accel_quantization"] = (q, q / 10.0, q * 10.0)
+    return estimate_terms(system, columns, model, terms)

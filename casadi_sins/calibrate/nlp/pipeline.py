@@ -1,0 +1,285 @@
+"""``calibrate_nlp``: calibration as one nonlinear least-squares problem, as a pipeline of named stages.
+
+1. :func:`_prepare`: observation spacing, the parameter model, the noise plan (raw data, datasheet),
+   base motion.
+2. :func:`_observable_graph`: the symbolic graph (:mod:`.graph`); extra groups the schedule cannot
+   see are left at their prior, with a warning.
+3. :func:`_fit_model`: Ipopt and the generalised least squares (:mod:`.gls`); the velocity steps
+   across rotations are dropped when they disagree with the static residuals; ``model="auto"``
+   keeps the extra groups the data support (:mod:`.selection`).
+4. :func:`_assess`: the checks (:mod:`.diagnostics`); when the residuals exceed the noise model, the
+   errors outside it are estimated (:mod:`.likelihood`) and the solve is repeated with them.
+5. :func:`_result`: the parameter table, its covariance and the report's contents.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from typing import Callable
+
+import numpy as np
+
+from ...core.rotations import rotation_matrices
+from ...core.units import ARCSEC, DEG_PER_H, UG
+from ...data.recording import Recording
+from ...model.noise import SensorNoise
+from ...model.parameters import ParameterSet
+from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
+from ...noise.motion import describe_motion
+from ...noise.plan import NoisePlan, plan_noise
+from ..initial import rough_parameters
+from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
+from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
+from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
+from .gls import Fit, fit_graph, generalised_least_squares
+from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
+from .ipopt import quick_weights
+from .likelihood import estimate_unmodelled
+from .selection import model_groups, model_label, select_groups, unobservable_group
+
+SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
+                 "W from the noise model (raw-data estimate, datasheet, fit), times the variance factor when "
+                 "the residuals exceed the model")
+
+
+@dataclasses.dataclass
+class _Run:
+    """What the stages share: the recording, the options, the noise plan and what was decided so far."""
+
+    rec: Recording
+    initial: ParameterSet
+    noise_plan: NoisePlan
+    observe_s: float
+    rotation_step_s: float
+    static_step_s: float
+    groups: tuple[str, ...]
+    model: object
+    solve: dict
+    progress: Callable[[str], None] | None
+    warnings: list[str]
+    t_start: float
+    noise_s: float
+    built: list[ResidualGraph] = dataclasses.field(default_factory=list)
+    selection: dict | None = None
+
+    def say(self, message: str) -> None:
+        if self.progress:
+            self.progress(f"nlp: {message}")
+
+    def build(self, names) -> ResidualGraph:
+        graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
+                            self.static_step_s, names)
+        self.built.append(graph)
+        self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
+                 f"({len(names)} parameters), {graph.n_residuals} residuals built in {graph.build_time:.2f} s")
+        return graph
+
+    def fit(self, graph: ResidualGraph, use_rotation_steps: bool) -> Fit:
+        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress, **self.solve)
+
+
+def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
+                  static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
+                  use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int = 100,
+                  progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
+                  static_step_s: float | None = None, model="21") -> CalibrationResult:
+    """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
+
+    Parameters
+    ----------
+    rec : Recording
+    initial : ParameterSet, optional
+        Starting values and reference of the natural-unit variables; default the rough values (extra
+        terms: their prior, 0).
+    hessian : {"gauss-newton", "exact", "limited-memory"}
+        Hessian of Ipopt's stage.
+    static_block_s : float, optional
+        Seconds between velocity observations in static segments (default
+        :func:`steps.default_observation_spacing`).
+    rotation_step_s : float
+        Rotation step (40 ms: a method error below 0.001 natural units on the paper's problem; the number of
+        steps, hence the time, does not grow with the sample rate).
+    use_rotation_steps : bool or "auto"
+        Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
+        static residuals (F-test, :data:`diagnostics.STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets
+        of a real unit make velocity steps that the 21-parameter model cannot explain.
+    tolerance : float
+        Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
+    max_iterations : int
+        Ipopt's iteration cap (3-5 are typical; far-off starts take more).
+    progress : callable, optional
+        Receives one line per stage.
+    noise : SensorNoise, optional
+        Datasheet noise terms; those not given are estimated from the data.
+    static_step_s : float, optional
+        Navigation step in static segments (default: the observation spacing; on a swaying base
+        :data:`steps.SWAY_STATIC_STEP_S`).
+    model : {"21", "extended", "auto"} or tuple of group keys
+        The parameters: the paper's 21; with every extra group of the registry (quadratic scale, lever arms,
+        time offset); or ``"auto"``: the extra groups the data support (each group's Wald statistic in the
+        extended fit against the Bayesian information criterion ``k ln n``), refitted with those alone.
+        Terms not estimated stay at their prior (0).
+
+    Raises
+    ------
+    CalibrationError
+        Ipopt fails to converge or the problem is rank deficient.
+    """
+    run = _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation_step_s, progress,
+                   {"hessian": hessian, "tolerance": tolerance, "max_iterations": max_iterations})
+    graph = _observable_graph(run)
+    graph, fit = _fit_model(run, graph, use_rotation_steps)
+    graph_s = sum(g.build_time for g in run.built)
+    timings = {"noise from the raw data": run.noise_s, "graph": graph_s,
+               "ipopt and generalised least squares": time.perf_counter() - run.t_start - graph_s - run.noise_s}
+    fit, assessment = _assess(run, graph, fit)
+    timings["checks and covariance"] = time.perf_counter() - run.t_start - sum(timings.values())
+    return _result(run, graph, fit, assessment, timings)
+
+
+def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation_step_s, progress, solve) -> _Run:
+    """Stage 1: options, the parameter model, the noise plan and the base motion."""
+    t_start = time.perf_counter()
+    observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
+    initial = initial or rough_parameters(rec)
+    groups = model_groups(model)
+    noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
+    noise_s = time.perf_counter() - t_start
+    swaying = describe_motion(noise_plan.motions)
+    if static_step_s is None:
+        static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
+    run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
+               list(rec.warnings), t_start, noise_s)
+    if swaying:
+        run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
+    return run
+
+
+def _observable_graph(run: _Run) -> ResidualGraph:
+    """Stage 2: the graph, without the extra groups the schedule cannot separate (left at their prior)."""
+    graph = run.build(model_names(run.groups))
+    while len(graph.names) > N_PARAMS:
+        dropped = unobservable_group(graph, quick_weights(graph, run.noise_plan.model, run.rec.dt, True,
+                                                          run.noise_plan.motions))
+        if dropped is None:
+            break
+        key, partners = dropped
+        run.groups = tuple(g for g in run.groups if g != key)
+        message = (f"{GROUPS[key].label} ({key}) is not observable from this schedule (one with "
+                   f"{', '.join(partners)}): left at {GROUPS[key].prior:g}")
+        run.warnings.append(message)
+        run.say(message)
+        graph = run.build(model_names(run.groups))
+    return graph
+
+
+def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[ResidualGraph, Fit]:
+    """Stage 3: fit with the velocity steps across rotations (dropped when unmodelled), and model selection."""
+    modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
+    for mode in modes:
+        if not mode:  # without the steps across rotations only the groups that need no steps remain observable
+            kept = tuple(g for g in groups_in(graph.names) if not GROUPS[g].needs_rotation_steps)
+            if model_names(kept) != graph.names:
+                left = [g for g in groups_in(graph.names) if g not in kept]
+                run.warnings.append(f"without the steps across rotations {', '.join(left)} cannot be seen: left at 0")
+                graph = run.build(model_names(kept))
+        fit = run.fit(graph, mode)
+        if run.model == "auto" and len(graph.names) > N_PARAMS:
+            graph, fit = _select(run, graph, fit, mode)
+        # steps that the model cannot explain: a 21-parameter fit of a unit with lever arms or a time offset
+        # would take them for sensor errors; a model with those terms keeps the steps (any misfit left is an
+        # unmodelled error, stage 4)
+        sees_steps = {"lever", "timing"} <= set(groups_in(graph.names))
+        if mode and len(modes) > 1 and not sees_steps and fit.rotation_step_ratio > STEP_CONSISTENCY_LIMIT:
+            message = (f"the velocity steps across rotations are {np.sqrt(fit.rotation_step_ratio):.3g} times "
+                       f"noisier than the static residuals: not explained by the {model_label(graph.names)} "
+                       "(lever arms, timing offset?); refitted without them")
+            run.say(message)
+            run.warnings.append(message)
+            continue
+        break
+    if describe_motion(run.noise_plan.motions):
+        run.warnings.append(f"{describe_motion(run.noise_plan.motions)}: the static gyro means carry the sway's "
+                            f"variance, the navigation steps {run.static_step_s:g} s")
+    return graph, fit
+
+
+def _select(run: _Run, graph: ResidualGraph, fit: Fit, mode: bool) -> tuple[ResidualGraph, Fit]:
+    """``model="auto"``: keep the extra groups whose Wald statistic passes the information criterion."""
+    run.selection = select_groups(graph, fit.z, fit.covariance_natural)
+    chosen = tuple(g for g in run.groups if run.selection.get(g, {}).get("selected"))
+    run.say("model selection: " + ", ".join(
+        f"{g} {v['statistic']:.3g} (threshold {v['threshold']:.3g}) {'kept' if v['selected'] else 'left at 0'}"
+        for g, v in run.selection.items()))
+    if model_names(chosen) != graph.names:
+        graph = run.build(model_names(chosen))
+        fit = run.fit(graph, mode)
+    return graph, fit
+
+
+def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]:
+    """Stage 4: the checks; errors outside the model get a place in it and the solve is repeated."""
+    assessment = assess(graph, fit, run.noise_plan)
+    if not assessment.model_fails:
+        return fit, assessment
+    # errors outside the model: an unmodelled acceleration per static segment, an unmodelled rate per gyro
+    # mean (and a velocity error per rotation), with variances from the residuals, and solve again
+    unmodelled = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,
+                                     fit.use_rotation_steps)
+    run.say(f"residuals exceed the noise model: unmodelled acceleration {unmodelled.unmodelled_acceleration / UG:.3g} "
+            f"ug per static segment, unmodelled rate {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean, "
+            f"unmodelled step {unmodelled.unmodelled_step * 1e3:.3g} mm/s per rotation added")
+    stats = fit.ipopt_stats
+    fit = generalised_least_squares(run.rec, graph, run.noise_plan, unmodelled, fit.z, fit.use_rotation_steps,
+                                    run.progress, update_free=False)
+    fit.ipopt_stats = stats
+    failed = [f"{c.name} {c.value:.3g} (limit {c.limit:.3g})" for c in assessment.checks if not c.passed]
+    assessment = assess(graph, fit, run.noise_plan)
+    step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
+            if fit.use_rotation_steps else "")
+    run.warnings.append(f"the residuals exceeded the sensor noise ({'; '.join(failed)}): errors outside the model "
+                        f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
+                        f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "
+                        f"mean{step}; sigma includes them")
+    return fit, assessment
+
+
+def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, timings: dict) -> CalibrationResult:
+    """Stage 5: the parameter table with its covariance, and everything the report needs."""
+    rec, names, reference = run.rec, graph.names, graph.reference
+    n_params = len(names)
+    covariance_w = fit.covariance_natural * assessment.variance_factor
+    values = natural_to_parameters(fit.z[:n_params], reference, names)
+    scale = variable_scale(reference, names)
+    covariance = covariance_w[:n_params, :n_params] * np.outer(scale, scale)
+    offsets = graph.start_offsets(fit.z)
+    start_attitudes = {g: rotation_matrices(offsets[g] * ARCSEC) @ graph.start_attitudes[g] for g in rec.group_ids}
+    model = fit.noise
+    white = {"accel_noise_ug": float(np.mean(model.accel_vrw)) / np.sqrt(rec.dt) / UG,
+             "gyro_noise_deg_h": float(np.mean(model.gyro_arw)) / np.sqrt(rec.dt) / DEG_PER_H,
+             "velocity_white_mps": float(np.sqrt(np.mean(model.accel_quantization**2)))}
+    nat = model.natural()
+    run.say(f"noise model: ARW {_fmt(nat['gyro_arw_deg_rth'])} deg/sqrt(h) ({run.noise_plan.source['gyro_arw']}), "
+            f"VRW {_fmt(nat['accel_vrw_ug_rthz'])} ug/sqrt(Hz) ({run.noise_plan.source['accel_vrw']}); variance "
+            f"factors velocity {assessment.factors['velocity']:.3g}, gyro {assessment.factors['gyro']:.3g}")
+    warnings = run.warnings + assessment.warnings
+    for message in assessment.warnings:
+        run.say(f"warning: {message}")
+    stats = fit.ipopt_stats
+    details = NlpDetails(stats["return_status"], int(stats["iter_count"]), fit.gls_steps, fit.use_rotation_steps,
+                         fit.rotation_step_ratio, offsets, start_attitudes, groups_in(names), run.selection,
+                         run.observe_s, run.static_step_s, timings["graph"], graph.observations,
+                         fit.whitened_residuals, white)
+    status, message = outcome(warnings, int(stats["iter_count"]))
+    return CalibrationResult(
+        ParameterSet(values, covariance=covariance, names=names), "nlp", True, status, message,
+        int(stats["iter_count"]), run.initial, [reference, values],
+        float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
+        warnings, assessment.checks, assessment.variance_factor,
+        NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source)),
+        run.noise_plan.motions, timings, nlp=details)
+
+
+def _fmt(values) -> str:
+    return "/".join(f"{v:.3g}" for v in np.atleast_1d(values))

@@ -1,0 +1,258 @@
+"""The commands: read the arguments, call the library, print what it found.  No physics here."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..calibrate import calibrate
+from ..calibrate.initial import rough_parameters
+from ..calibrate.result import CalibrationError
+from ..core.earth import Site
+from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
+from ..data.datasheet import read_datasheet
+from ..data.description import description_toml, read_recording
+from ..data.problem import load_problem
+from ..data.samples import read_samples
+from ..data.segmentation import refine, segment_recording
+from ..data.tables import read_table, table_text, write_table
+from ..nav.navigation import navigate
+from ..report.calibration import recording_hash, report_files
+from ..report.exports import EXPORTS, export_files
+from ..report.plots import plot_navigation
+from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
+from ..sim import simulate, write_simulation
+from ..studies import montecarlo as MC
+from ..studies.budget import problem_budget, write_budget
+from ..studies.compare import compare, comparison_files
+from ..studies.demo import run_demo
+from ..studies.navcheck import navigation_check, write_navigation_check
+from ..studies.prediction import predict_file, predict_problem, write_analysis
+
+
+class CliError(Exception):
+    """A failure to report to the user in one line, with a non-zero exit status."""
+
+
+def _number_format(digits: int = 4):
+    return lambda x: f"{x:.{digits}g}"
+
+
+def cmd_simulate(args) -> int:
+    """``simulate``: a problem's experiment as a recording and its truth."""
+    problem = load_problem(args.problem)
+    changes = {}
+    if args.start_attitude_deg is not None:
+        changes["start_attitude_deg"] = args.start_attitude_deg
+    if args.quantize:
+        changes["quantize"] = True
+    if changes:
+        problem = problem.with_changes(**changes)
+    t0 = time.perf_counter()
+    sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name and safe_stem(args.name))
+    path = write_simulation(sim, args.out)
+    print(f"wrote {path} (+ .csv, .truth.csv): {len(sim.recording.time)} samples, {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+def cmd_validate(args) -> int:
+    """``validate``: read and check a recording, print its schedule."""
+    rec = read_recording(args.recording)
+    print(recording_summary(rec))
+    print("valid sins-recording/1")
+    return 0
+
+
+def cmd_rough(args) -> int:
+    """``rough``: the paper's rough initial values of a recording."""
+    path = write_table(args.out, rough_parameters(read_recording(args.recording)))
+    print(f"wrote {path}")
+    return 0
+
+
+def cmd_navigate(args) -> int:
+    """``navigate``: each group navigated with each table; the static segments' velocity and a plot."""
+    rec = read_recording(args.recording)
+    runs = ({Path(path).stem: read_table(path).values for path in args.params} if args.params
+            else {"rough initial values": rough_parameters(rec).values})
+    out = Path(args.out)
+    navs = {}
+    for label, values in runs.items():
+        t0 = time.perf_counter()
+        navs[label] = navigate(rec, values)
+        print(f"navigated {rec.name} with {label} in {time.perf_counter() - t0:.2f} s")
+        table = static_velocity_table(rec, navs[label])
+        write_frame(table, out / f"{rec.file_stem}-{safe_stem(label)}-static", f"{rec.name}: static segments, {label}")
+        print(table.to_string(index=False, float_format=_number_format()))
+    print(f"wrote {plot_navigation(rec, navs, out / f'{rec.file_stem}-velocity.png')}")
+    return 0
+
+
+def cmd_segment(args) -> int:
+    """``segment``: find the schedule of a CSV and write its description."""
+    data = Path(args.data)
+    if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
+        raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+    time_, pulses = read_samples(data.resolve(), args.rate)
+    site = Site(np.radians(args.latitude), args.height, args.gravity)
+    name = args.name or Path(args.out).stem
+    try:
+        rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
+    except ValueError as exc:
+        raise CliError(f"{data}: {exc}") from None
+    out = Path(args.out)
+    atomic_write_text(out, description_toml(rec, os.path.relpath(data.resolve(), out.resolve().parent)))
+    for note in notes:
+        print(f"note: {note}")
+    print(recording_summary(rec))
+    print(f"wrote {out}: {len(rec.segments)} segments in {len(rec.group_ids)} groups")
+    return 0
+
+
+def cmd_export(args) -> int:
+    """``export``: a table as compensation matrices or the PSINS struct."""
+    params = read_table(args.table)
+    metadata = {k: v for k, v in (("unit_id", args.unit_id), ("table", str(args.table))) if v}
+    atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
+    print(f"wrote {args.out} ({args.format})")
+    return 0
+
+
+def cmd_calibrate(args) -> int:
+    """``calibrate``: the parameter table, its report, plots and exports, all written together."""
+    if args.report:  # before any computation (--out is checked in main)
+        check_writable(args.report, directory=True)
+    rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
+    truth = read_table(args.truth) if args.truth else None
+    initial = read_table(args.initial) if args.initial else None
+    noise = read_datasheet(args.noise) if args.noise else None
+    options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
+    try:
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
+                           **options)
+    except CalibrationError as exc:
+        raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
+    if args.strict and result.warnings:
+        raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
+                       + " | ".join(result.warnings))
+    files = {Path(args.out): table_text(result.parameters, truth).encode()}
+    files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
+                              unit_id=args.unit_id))
+    files.update(export_files(result.parameters, args.out, args.export or (), {
+        "unit_id": args.unit_id, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver}))
+    write_files(files)
+    print(natural_table(parameter_report(result, truth)).to_string(index=False))
+    print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
+          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
+    if "not modelled" in (result.noise.sources.get("gyro_bias_instability"),
+                          result.noise.sources.get("accel_bias_instability")):
+        print("note: bias instability is not modelled (no --noise datasheet): the bias sigmas exclude a drift "
+              "slower than this recording can show")
+    for message in result.warnings:
+        print(f"WARNING: {message}", file=sys.stderr)
+    return 0
+
+
+def cmd_compare(args) -> int:
+    """``compare``: both solvers on one recording."""
+    rec = read_recording(args.recording)
+    truth = read_table(args.truth) if args.truth else None
+    try:
+        comparison = compare(rec, truth, progress=print)
+    except CalibrationError as exc:
+        raise CliError(f"{rec.label}: calibration failed: {exc}") from None
+    write_files(comparison_files(rec, comparison, args.out, truth))
+    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
+    table = comparison.table
+    cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
+    if truth is not None:
+        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print(f"wrote the comparison to {args.out}")
+    return 0
+
+
+def cmd_analyze(args) -> int:
+    """``analyze``: predicted accuracy of schedules."""
+    predictions = []
+    for path in args.inputs:
+        t0 = time.perf_counter()
+        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h, model=args.model)
+        predictions.append(pred)
+        print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
+              f"{', '.join(pred.weak) or 'none'}")
+    table = write_analysis(predictions, args.out)
+    print(table.to_string(index=False, float_format=_number_format()))
+    print(f"wrote the predicted sigma tables and plot to {args.out}")
+    return 0
+
+
+def cmd_montecarlo(args) -> int:
+    """``montecarlo``: simulate and calibrate many seeds."""
+    from tqdm import tqdm
+
+    problem = load_problem(args.problem)
+    predicted = predict_problem(problem).sigma_natural
+    seeds = range(args.first_seed, args.first_seed + args.runs)
+    t0 = time.perf_counter()
+    with tqdm(total=args.runs, desc=f"monte carlo {problem.name}", unit="run") as bar:
+        rows = MC.run(problem, seeds, args.solvers, args.workers, progress=lambda k, n: bar.update(k - bar.n),
+                      scheduler=args.dask)
+    elapsed = time.perf_counter() - t0
+    summary = MC.with_prediction(MC.summary(rows), predicted)
+    write_files(MC.montecarlo_files(problem, rows, summary, args.out, args.runs, elapsed))
+    failed = rows[rows["failed"] != ""] if "failed" in rows else rows.iloc[:0]
+    print(summary[MC.SUMMARY_COLUMNS].to_string(index=False, float_format=_number_format()))
+    print(f"{args.runs} runs in {elapsed:.1f} s ({len(failed)} failed); wrote {args.out}/{problem.name}-montecarlo."
+          "{csv,md,png}")
+    return 0
+
+
+def cmd_navcheck(args) -> int:
+    """``navcheck``: 1 h free-inertial navigation with each table."""
+    problem = load_problem(args.problem)
+    tables = {Path(p).stem: read_table(p).values for p in args.params}
+    runs, table = navigation_check(problem, tables, seed=args.seed, duration_s=args.duration_s, align_s=args.align_s)
+    write_navigation_check(runs, table, args.out, problem.name)
+    print(table.to_string(index=False, float_format=_number_format()))
+    print(f"wrote {args.out}/{problem.name}-navcheck.{{csv,md,png}}")
+    return 0
+
+
+def cmd_budget(args) -> int:
+    """``budget``: static navigation error by source."""
+    problem = load_problem(args.problem)
+    if args.params:
+        table = read_table(args.params)
+        if table.sigma is None:
+            raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
+        nominal, covariance = table.values, np.diag(np.nan_to_num(table.sigma) ** 2)
+        source = f"{args.params} (sigma only: correlations between parameters not known)"
+    else:
+        pred = predict_problem(problem)
+        nominal, covariance = pred.nominal.values, pred.nominal.covariance
+        source = f"the predicted covariance of {problem.name}'s schedule"
+    budget = problem_budget(problem, nominal, covariance, args.orientation, args.hours)
+    table = write_budget(budget, args.out, safe_stem(problem.name))
+    print(f"parameter uncertainty from {source}")
+    print(table.to_string(index=False, float_format=_number_format(3)))
+    print(f"wrote {args.out}/{safe_stem(problem.name)}-budget.{{csv,md,png}}")
+    return 0
+
+
+def cmd_demo(args) -> int:
+    """``demo``: the main job on the default problem."""
+    demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=print)
+    comparison = demo.comparison
+    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
+    cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
+    print(comparison.table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print("navigation check, 1 h static free-inertial after alignment:")
+    print(demo.navigation.to_string(index=False, float_format=_number_format()))
+    print("error budget of static navigation with the NLP's parameters (1 sigma, m):")
+    print(demo.budget.to_string(index=False, float_format=_number_format(3)))
+    print(f"wrote the comparison, navigation check, budget and parameter tables to {args.out}")
+    return 0

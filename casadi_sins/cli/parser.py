@@ -1,0 +1,136 @@
+"""The command line's arguments: every command, option and argument with its help."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..core.version import __version__
+from ..report.exports import EXPORTS
+from .commands import (cmd_analyze, cmd_budget, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
+                       cmd_navcheck, cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
+
+
+def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
+    """The argument parser of ``casadi-sins``."""
+    parser = argparse.ArgumentParser(
+        prog="casadi-sins",
+        description="System-level calibration of strapdown inertial navigation systems (21-parameter model).")
+    parser.add_argument("--version", action="version", version=f"casadi-sins {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of deviations and noise (default 0)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--name", help="recording name (default PROBLEM-seedN)")
+    p.add_argument("--no-noise", action="store_true", help="leave out the sensor noise")
+    p.add_argument("--quantize", action="store_true", help="integer pulses, remainder carried")
+    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("validate", help="read and check a recording; print its summary")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("rough", help="the paper's rough initial parameters of a recording")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.add_argument("--out", required=True, help="parameter table CSV to write")
+    p.set_defaults(func=cmd_rough)
+
+    p = sub.add_parser("navigate", help="navigate a recording's groups; velocity per static segment and a plot")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.add_argument("--params", nargs="*", help="parameter tables (default: rough initial values)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_navigate)
+
+    p = sub.add_parser("calibrate", help="calibrate a recording: the parameter table (and a report)")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.add_argument("--solver", default="nlp", choices=["nlp", "ils"],
+                   help="nlp: CasADi/Ipopt over all rotations (default); ils: the paper's iterative least squares")
+    p.add_argument("--out", required=True, help="parameter table CSV to write")
+    p.add_argument("--report", help="folder for the full report: per-iteration and parameter tables (CSV, Markdown), the report (JSON, Markdown), residual and Allan-deviation plots (PNG)")
+    p.add_argument("--truth", help="truth table: adds errors in natural units to the table and report")
+    p.add_argument("--initial", help="starting parameter table (default: the paper's rough values)")
+    p.add_argument("--max-iterations", type=int, help="iteration cap: nlp, Ipopt's (default 100, typically 3-5 used); ils, the paper's iterations (default 10, typically 4 used)")
+    p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
+                   "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
+    p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
+    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
+                   help="parameters: the paper's 21 (default); extended: also accelerometer quadratic scale, lever "
+                   "arms and the gyro/accel time offset; auto: the extra groups the data support (nlp only)")
+    p.add_argument("--export", nargs="+", choices=list(EXPORTS),
+                   help="also write the table as compensation matrices (NAME.compensation.json / .yaml) or as the "
+                   "PSINS clbt struct (NAME.clbt.m)")
+    p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
+    p.set_defaults(func=cmd_calibrate)
+
+    p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")
+    p.add_argument("data", help="the samples, NAME.csv (time, gyro_x..z, accel_x..z)")
+    p.add_argument("--rate", type=float, required=True, help="sample rate, Hz")
+    p.add_argument("--latitude", type=float, required=True, help="latitude of the site, deg")
+    p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
+    p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
+    p.add_argument("--name", help="recording name (default: the output's stem)")
+    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment (s)")
+    p.add_argument("--out", required=True, help="recording description NAME.toml to write")
+    p.set_defaults(func=cmd_segment)
+
+    p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML) or PSINS clbt text")
+    p.add_argument("table", help="parameter table CSV")
+    p.add_argument("--format", required=True, choices=list(EXPORTS), help="json or yaml: compensation matrices; psins: the PSINS clbt struct")
+    p.add_argument("--out", required=True, help="file to write")
+    p.add_argument("--unit-id", help="serial number of the unit")
+    p.set_defaults(func=cmd_export)
+
+    p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")
+    p.add_argument("recording", help="recording description NAME.toml")
+    p.add_argument("--truth", help="truth table: errors against it in natural units")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_compare)
+
+    p = sub.add_parser("analyze", help="predicted accuracy of schedules before any data (problem or recording)")
+    p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--accel-noise-ug", type=float, help="accelerometer white noise per sample (default: the "
+                   "problem's, or measured in the recording)")
+    p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
+                   "problem's, or measured in the recording)")
+    p.add_argument("--model", default="21", choices=["21", "extended"],
+                   help="extended: also predict the extra terms (quadratic scale, lever arms, time offset)")
+    p.set_defaults(func=cmd_analyze)
+
+    p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--runs", type=int, default=50, help="number of seeds (default 50)")
+    p.add_argument("--first-seed", type=int, default=10000, help="first seed (default 10000)")
+    p.add_argument("--solvers", nargs="+", default=["nlp", "ils"], choices=["nlp", "ils"], help="solvers to run (default both)")
+    p.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address, or 'local'")
+    p.add_argument("--out", default="runs/montecarlo", help="output folder (default runs/montecarlo)")
+    p.set_defaults(func=cmd_montecarlo)
+
+    p = sub.add_parser("navcheck", help="1 h free-inertial navigation of a fresh static recording per table")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (sensors, truth, noise; default paper)")
+    p.add_argument("--params", nargs="+", required=True, help="parameter tables to check")
+    p.add_argument("--seed", type=int, default=0, help="seed of the fresh static recording (default 0)")
+    p.add_argument("--duration-s", type=float, default=3600.0, help="navigation time, s (default 3600)")
+    p.add_argument("--align-s", type=float, default=300.0, help="alignment time before it, s (default 300)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_navcheck)
+
+    p = sub.add_parser("budget", help="static navigation error over 1 h and 24 h by source, by covariance")
+    p.add_argument("problem", nargs="?", default=None, help="problem file: site, sensors, noise (default paper)")
+    p.add_argument("--params", help="calibrated parameter table with sigma (default: the schedule's predicted "
+                   "covariance)")
+    p.add_argument("--orientation", default="ENU", help="orientation letters of the unit while navigating (default ENU)")
+    p.add_argument("--hours", type=float, default=24.0, help="navigation time, h (default 24)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_budget)
+
+    p = sub.add_parser("demo", help="simulate the paper's experiment, both solvers side by side, navigation check and error budget")
+    p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
+    p.add_argument("--seed", type=int, default=1, help="random seed of the simulation (default 1)")
+    p.add_argument("--out", default="runs/demo", help="output folder (default runs/demo; the published "
+                   "results/ are made by benchmarks/regenerate_results.sh)")
+    p.set_defaults(func=cmd_demo)
+    return parser

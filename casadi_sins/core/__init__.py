@@ -1,0 +1,1 @@
+"""Foundations used by every other part: units, the Earth, rotations, errors, files."""

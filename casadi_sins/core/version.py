@@ -1,0 +1,3 @@
+"""The package version, written into reports and exports."""
+
+__version__ = "0.2.0"

@@ -1,0 +1,203 @@
+"""The TOML recording description of ``sins-recording/1``: read a recording, write one.
+
+::
+
+    format = "sins-recording/1"
+    name = "kang2013-sim-seed7"
+    data = "kang2013-sim-seed7.csv"   # path relative to this file
+
+    [site]
+    latitude_deg = 37.5
+    height_m = 0.0
+    # gravity_mps2 = 9.7997            # optional; default: normal gravity at lat/height
+
+    [imu]
+    rate_hz = 100.0
+
+    [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg)
+    group = 1
+    kind = "static"
+    orientation = "NUE"
+    start_s = 0.0
+    end_s = 100.0
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..core import orientation as orient
+from ..core.earth import Site
+from ..core.errors import InputError, shown
+from ..core.files import atomic_write_text
+from ..core.toml import array_table_lines, read_toml_text
+from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
+from .samples import read_samples, write_samples
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Read and validate a recording from its TOML description.
+
+    Raises
+    ------
+    InputError
+        With the file and the line or segment of the first problem found.
+    """
+    path = Path(path)
+    doc, text = read_toml_text(path, "recording description")
+    if doc.get("format") != FORMAT:
+        raise InputError(path, f"format must be {FORMAT!r}, found {shown(doc.get('format'))}")
+    name = _require(doc, "name", str, path)
+    data_name = _require(doc, "data", str, path)
+    if not data_name.strip():
+        raise InputError(path, "'data' is empty; it must name the CSV of samples")
+    site = _parse_site(doc.get("site"), path)
+    imu = doc.get("imu")
+    if not isinstance(imu, dict):
+        raise InputError(path, "missing [imu] table with rate_hz")
+    rate_hz = _number(imu.get("rate_hz"), path, "[imu] rate_hz")
+    if not 1.0 <= rate_hz <= 1e5:
+        raise InputError(path, f"[imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz:g}")
+    segments = _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments"))
+    data_path = (path.parent / data_name).resolve()
+    time, pulses = read_samples(data_path, rate_hz)
+    rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time,
+                    gyro=pulses[:, :3], accel=pulses[:, 3:], source=path)
+    rate_warning = check_rate(time, rate_hz, data_path)
+    if rate_warning:
+        rec.warnings.append(rate_warning)
+    validate_schedule(rec)
+    check_physical_range(rec, data_path)
+    return rec
+
+
+def _require(doc: dict, key: str, kind: type, path) -> object:
+    value = doc.get(key)
+    if not isinstance(value, kind):
+        raise InputError(path, f"missing or invalid {key!r} (expected {kind.__name__})")
+    return value
+
+
+def _number(value, path, what: str, line: int | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        found = "nothing" if value is None else shown(value)
+        raise InputError(path, f"{what} must be a finite number, found {found}", line=line)
+    return float(value)
+
+
+def _parse_site(site, path: Path) -> Site:
+    if not isinstance(site, dict):
+        raise InputError(path, "missing [site] table with latitude_deg and height_m")
+    lat = _number(site.get("latitude_deg"), path, "[site] latitude_deg")
+    if not -90.0 <= lat <= 90.0:
+        raise InputError(path, f"[site] latitude_deg {lat:g} is outside -90..90")
+    height = _number(site.get("height_m"), path, "[site] height_m")
+    if not -500.0 <= height <= 10000.0:
+        raise InputError(path, f"[site] height_m {height:g} is outside -500..10000 m (a test site on the ground)")
+    gravity = site.get("gravity_mps2")
+    if gravity is not None:
+        gravity = _number(gravity, path, "[site] gravity_mps2")
+        if not 9.7 < gravity < 9.9:
+            raise InputError(path, f"[site] gravity_mps2 {gravity:g} is not a gravity on Earth (9.7..9.9)")
+    return Site(latitude=math.radians(lat), height=height, gravity=gravity)
+
+
+def _parse_segments(items, path: Path, lines: list[int]) -> list[Segment]:
+    if not isinstance(items, list) or not items:
+        raise InputError(path, "no [[segments]]")
+    return [_parse_segment(item, number, path, lines[number - 1] if number <= len(lines) else None)
+            for number, item in enumerate(items, start=1)]
+
+
+def _parse_segment(item, number: int, path: Path, line: int | None) -> Segment:
+    """One ``[[segments]]`` table; errors name the segment and the line of its header."""
+
+    def fail(message):
+        return InputError(path, f"segment {number}: {message}", line=line)
+
+    if not isinstance(item, dict):
+        raise fail("not a table")
+    group = item.get("group")
+    if isinstance(group, bool) or not isinstance(group, int):
+        raise fail(f"'group' must be an integer, found {shown(group)}")
+    kind = item.get("kind")
+    start = _number(item.get("start_s"), path, f"segment {number}: start_s", line)
+    end = _number(item.get("end_s"), path, f"segment {number}: end_s", line)
+    if end <= start:
+        raise fail(f"end_s {end:g} is not after start_s {start:g}")
+    if kind == "static":
+        orientation = item.get("orientation")
+        if not isinstance(orientation, str) or orientation != orientation.upper():
+            raise fail(f"orientation {shown(orientation)} must be three capital letters of N S E W U D")
+        try:
+            orient.orientation_to_dcm(orientation)
+        except orient.OrientationError as exc:
+            raise fail(str(exc)) from None
+        return Segment(number, group, kind, start, end, orientation=orientation)
+    if kind == "rotation":
+        axis = item.get("axis")
+        try:
+            orient.parse_axis(axis)
+        except orient.OrientationError as exc:
+            raise fail(str(exc)) from None
+        angle = _number(item.get("angle_deg"), path, f"segment {number}: angle_deg", line)
+        if angle == 0.0:
+            raise fail("angle_deg must not be zero")
+        return Segment(number, group, kind, start, end, axis=axis, angle_deg=angle)
+    raise fail(f"kind must be 'static' or 'rotation', found {shown(kind)}")
+
+
+def description(rec: Recording, data_name: str) -> dict:
+    """The TOML description of a recording as a dictionary."""
+    site = {"latitude_deg": math.degrees(rec.site.latitude), "height_m": rec.site.height}
+    if rec.site.gravity is not None:
+        site["gravity_mps2"] = rec.site.gravity
+    segments = []
+    for seg in rec.segments:
+        item = {"group": seg.group, "kind": seg.kind}
+        if seg.is_static:
+            item["orientation"] = seg.orientation
+        else:
+            item["axis"] = seg.axis
+            item["angle_deg"] = seg.angle_deg
+        item["start_s"] = seg.start
+        item["end_s"] = seg.end
+        segments.append(item)
+    return {"format": FORMAT, "name": rec.name, "data": data_name, "site": site,
+            "imu": {"rate_hz": rec.rate_hz}, "segments": segments}
+
+
+def toml_value(value) -> str:
+    """A value as TOML text (strings as JSON strings: a JSON string is a valid TOML basic string)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"cannot write {value!r} to TOML")
+        return repr(value)
+    return json.dumps(str(value))
+
+
+def description_toml(rec: Recording, data_name: str) -> str:
+    """The TOML description in the layout of the format (top keys, [site], [imu], [[segments]])."""
+    doc = description(rec, data_name)
+    lines = [f"# {FORMAT} recording written by casadi-sins"]
+    lines += [f"{key} = {toml_value(doc[key])}" for key in ("format", "name", "data")]
+    for table in ("site", "imu"):
+        lines += ["", f"[{table}]"] + [f"{k} = {toml_value(v)}" for k, v in doc[table].items()]
+    for item in doc["segments"]:
+        lines += ["", "[[segments]]"] + [f"{k} = {toml_value(v)}" for k, v in item.items()]
+    return "\n".join(lines) + "\n"
+
+
+def write_recording(rec: Recording, toml_path: str | Path) -> Path:
+    """Write ``NAME.toml`` and its CSV (same stem) atomically; returns the TOML path."""
+    toml_path = Path(toml_path)
+    csv_path = toml_path.with_suffix(".csv")
+    write_samples(csv_path, rec)
+    atomic_write_text(toml_path, description_toml(rec, csv_path.name))
+    return toml_path

@@ -1,0 +1,68 @@
+"""The noise model of one calibration and where each of its terms came from.
+
+Terms come from a datasheet when given, else from the raw data when they determine them, else from
+the fit (white noise hidden under coarse pulses, bounded by the raw data).  Bias instability comes
+from a datasheet only; without one the report says so.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..data.recording import Recording
+from ..model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
+from .motion import SegmentMotion, base_motion
+from .raw import RawNoise, estimate_sensor_noise
+
+@dataclasses.dataclass
+class NoisePlan:
+    """The noise model of a calibration and where each term came from."""
+
+    raw: RawNoise
+    given: SensorNoise  # datasheet terms (None where not given)
+    model: SensorNoise  # in use: given, else raw where determined, else fitted
+    source: dict[str, str]  # term -> "datasheet" | "raw data" | "fit" | "not modelled"
+    motions: list[SegmentMotion]
+
+    def free_terms(self) -> dict[str, list[str]]:
+        """Terms the fit must set, by residual kind they show in most."""
+        return {"velocity": [t for t in ("accel_vrw",) if self.source[t] == "fit"],
+                "gyro": [t for t in ("gyro_arw",) if self.source[t] == "fit"]}
+
+
+def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None = None) -> NoisePlan:
+    """Raw-data noise estimate, merged with a datasheet; base motion."""
+    raw = estimate_sensor_noise(rec, reference)
+    given = given or SensorNoise()
+    determined = raw.model()
+    bounds = raw.upper_bounds()
+    model = SensorNoise(
+        gyro_arw=_first(given.gyro_arw, determined.gyro_arw, np.maximum(bounds.gyro_arw, GYRO_ARW_FLOOR)),
+        accel_vrw=_first(given.accel_vrw, determined.accel_vrw, np.maximum(bounds.accel_vrw, ACCEL_VRW_FLOOR)),
+        gyro_quantization=_first(given.gyro_quantization, determined.gyro_quantization),
+        accel_quantization=_first(given.accel_quantization, determined.accel_quantization),
+        gyro_bias_instability=given.gyro_bias_instability or 0.0, gyro_bias_tau=given.gyro_bias_tau,
+        accel_bias_instability=given.accel_bias_instability or 0.0, accel_bias_tau=given.accel_bias_tau)
+    model.gyro_arw = np.maximum(model.gyro_arw, GYRO_ARW_FLOOR)
+    model.accel_vrw = np.maximum(model.accel_vrw, ACCEL_VRW_FLOOR)
+
+    def source(given_value, determined_value):
+        return "datasheet" if given_value is not None else ("raw data" if determined_value is not None else "fit")
+
+    sources = {"gyro_arw": source(given.gyro_arw, determined.gyro_arw),
+               "accel_vrw": source(given.accel_vrw, determined.accel_vrw),
+               "gyro_quantization": "datasheet" if given.gyro_quantization is not None else "raw data",
+               "accel_quantization": "datasheet" if given.accel_quantization is not None else "raw data",
+               "gyro_bias_instability": "datasheet" if given.gyro_bias_instability is not None else "not modelled",
+               "accel_bias_instability": "datasheet" if given.accel_bias_instability is not None else "not modelled"}
+    motions = base_motion(rec, reference, model)
+    return NoisePlan(raw, given, model, sources, motions)
+
+
+def _first(*values):
+    for value in values:
+        if value is not None:
+            return np.asarray(value, dtype=float).copy()
+    return None

@@ -1,0 +1,1 @@
+"""What a user reads: tables in natural units, the calibration report, plots, exports."""

@@ -1,0 +1,241 @@
+"""The report of a calibration: what an engineer needs to trust (or refuse) a parameter table.
+
+Written beside the parameter table (its companion, ``NAME.report.json`` and ``NAME.report.md``) and,
+with ``--report DIR``, with plots and the per-iteration table.  It carries: provenance (software
+version, date, recording hash), the table in natural units with sigma, the noise model (measured in
+the raw data, given, fitted) in ARW/VRW units, every warning, every consistency check, the solver's
+status (Ipopt status and iterations, the post-solve steps), the most correlated parameter pairs and
+the base motion found.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..core.version import __version__
+from ..calibrate.result import CalibrationResult
+from ..core.units import DEG_PER_H, UG
+from ..data.recording import Recording
+from ..model.noise import SensorNoise
+from ..model.parameters import ParameterSet, natural_errors
+from ..model.registry import natural_unit_of, natural_value_of, unit_of
+from .plots import noise_plot, residual_plot
+from .tables import calibration_tables, markdown_table, natural_noise_frame
+
+
+def recording_hash(rec) -> str | None:
+    """SHA-256 over the recording's TOML and data files (None for a recording made in memory)."""
+    if rec.source is None:
+        return None
+    digest = hashlib.sha256()
+    paths = [Path(rec.source)]
+    try:
+        data = tomllib.loads(paths[0].read_text(encoding="utf-8")).get("data")
+        if data:
+            paths.append(paths[0].parent / data)
+        for path in paths:
+            with open(path, "rb") as handle:
+                for block in iter(lambda: handle.read(1 << 20), b""):
+                    digest.update(block)
+    except (OSError, ValueError):
+        return None
+    return digest.hexdigest()
+
+
+def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> list[dict]:
+    """One row per parameter: SI value and sigma, natural value and sigma, error against a truth."""
+    sigma = params.natural_sigma()
+    errors = natural_errors(params, truth) if truth is not None else None
+    rows = []
+    for i, name in enumerate(params.names):
+        value, unit = natural_value_of(name, params.values[i])
+        row = {"parameter": name, "unit": unit_of(name), "value": float(params.values[i]),
+               "sigma": None if params.sigma is None else float(params.sigma[i]),
+               "value_natural": value, "value_unit": unit, "sigma_natural": float(sigma[i]),
+               "sigma_unit": natural_unit_of(name)}
+        if errors is not None:
+            err = float(errors[i])
+            row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
+        rows.append(row)
+    return rows
+
+
+def strongest_correlations(params: ParameterSet, count: int = 6) -> list[dict]:
+    """The most correlated parameter pairs (the weakly separated directions of the schedule)."""
+    if params.covariance is None:
+        return []
+    sd = np.sqrt(np.diag(params.covariance))
+    corr = params.covariance / np.outer(sd, sd)
+    n = len(params.names)
+    pairs = sorted(((abs(corr[i, j]), i, j) for i in range(n) for j in range(i + 1, n)), reverse=True)
+    return [{"a": params.names[i], "b": params.names[j], "correlation": float(corr[i, j])}
+            for _, i, j in pairs[:count]]
+
+
+def _noise_dict(noise: SensorNoise | None) -> dict | None:
+    if noise is None:
+        return None
+    out = {}
+    for key, value in noise.complete().natural().items():
+        out[key] = value.tolist() if isinstance(value, np.ndarray) else float(value)
+    out["unmodelled_acceleration_ug"] = noise.unmodelled_acceleration / UG
+    out["unmodelled_rate_deg_h"] = noise.unmodelled_rate / DEG_PER_H
+    out["unmodelled_step_mm_s"] = noise.unmodelled_step * 1e3
+    return out
+
+
+def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None, command: str | None = None,
+                unit_id: str | None = None) -> dict:
+    """Everything of the report as plain data (the JSON file)."""
+    raw = result.noise.raw
+    checks = [c.as_dict() for c in result.checks]
+    motion = result.base_motion
+    data = {
+        "format": "casadi-sins-report/1",
+        "software": f"casadi-sins {__version__}",
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": command,
+        "unit_id": unit_id,
+        "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
+                      "sha256": recording_hash(rec), "samples": int(len(rec.time)), "rate_hz": rec.rate_hz,
+                      "groups": len(rec.group_ids), "segments": len(rec.segments),
+                      "latitude_deg": math.degrees(rec.site.latitude), "gravity_mps2": rec.site.g},
+        "solver": result.solver,
+        "converged": bool(result.success),
+        "iterations": int(result.nit),
+        "wall_time_s": float(result.wall_time),
+        "sigma_meaning": result.sigma_meaning,
+        "status": int(result.status),
+        "message": result.message,
+        "warnings": list(result.warnings),
+        "checks": checks,
+        "variance_factor": float(result.variance_factor),
+        "parameters": parameter_rows(result.parameters, truth),
+        "strongest_correlations": strongest_correlations(result.parameters),
+        "noise": {"model": _noise_dict(result.noise.model), "fitted": _noise_dict(result.noise.fitted),
+                  "raw": _noise_dict(raw.model().merged(raw.upper_bounds()) if raw is not None else None),
+                  "raw_determined": ({s: [t.determined for t in raw.white[s]] for s in raw.white}
+                                     if raw is not None else None),
+                  "sources": dict(result.noise.sources)},
+        "base_motion": [{"segment": m.segment, "amplitude_arcsec": m.amplitude_arcsec,
+                         "period_s": None if not np.isfinite(m.period_s) else m.period_s,
+                         "significant": m.significant} for m in motion],
+    }
+    if result.nlp is not None:
+        nlp = result.nlp
+        data["ipopt"] = {"status": nlp.ipopt_status, "iterations": nlp.ipopt_iterations}
+        data["post_solve_steps_sigma"] = [float(s) for s in nlp.gls_steps]
+        data["rotation_steps_used"] = bool(nlp.rotation_steps_used)
+        data["start_offsets_arcsec"] = {str(g): [float(x) for x in v] for g, v in nlp.start_offsets_arcsec.items()}
+        data["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection}
+    if result.ils is not None:
+        data["equations"] = result.ils.equations
+    return data
+
+
+def report_markdown(data: dict) -> str:
+    """The report as Markdown."""
+    rec = data["recording"]
+    lines = [f"# Calibration report: {rec['name']} ({data['solver']})", "",
+             f"- unit: {data.get('unit_id') or '(no --unit-id given)'}",
+             f"- software: {data['software']}, created {data['created']}",
+             f"- recording: {rec['source'] or '(in memory)'}, sha256 `{rec['sha256']}`",
+             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
+             f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
+    if data.get("command"):
+        lines.append(f"- command: `{data['command']}`")
+    status = "converged" if data["converged"] else "NOT converged"
+    if "ipopt" in data:
+        ip = data["ipopt"]
+        lines.append(f"- solver: NLP, Ipopt {ip['status']} after {ip['iterations']} iterations; generalised least "
+                     "squares steps " + ", ".join(f"{s:.3g}" for s in data["post_solve_steps_sigma"]) + " sigma; "
+                     f"velocity steps across rotations {'used' if data['rotation_steps_used'] else 'NOT used'}")
+    else:
+        lines.append(f"- solver: ILS (the paper's), {data['iterations']} iterations, {data['equations']} equations, "
+                     f"{status}")
+    lines.append(f"- wall time {data['wall_time_s']:.2f} s; sigma: {data['sigma_meaning']}")
+    lines += ["", "## Warnings", ""]
+    lines += [f"- **{w}**" for w in data["warnings"]] or ["- none"]
+    lines += ["", "## Parameters", ""]
+    frame = pd.DataFrame(data["parameters"])
+    cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
+    cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
+    lines.append(markdown_table(frame[cols], "%.6g"))
+    lines += ["", "SI values (the table to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
+              "## Noise", ""]
+    noise = data["noise"]
+    models = {k: SensorNoise.from_natural(v) for k, v in (("raw data", noise["raw"]), ("in the model", noise["model"]),
+                                                          ("implied by the fit", noise["fitted"])) if v}
+    if models:
+        lines.append(markdown_table(natural_noise_frame(models), "%.4g"))
+        if noise.get("sources"):
+            lines += ["", "Where each term of the model comes from: "
+                      + ", ".join(f"{k} {v}" for k, v in noise["sources"].items()) + "."]
+        sources = noise.get("sources") or {}
+        if sources.get("gyro_bias_instability") == "not modelled" or sources.get("accel_bias_instability") == \
+                "not modelled":
+            lines += ["", "Bias instability is not modelled: no datasheet value was given, and a recording of "
+                      f"{rec['samples'] / rec['rate_hz'] / 60:.0f} min cannot show a drift with a correlation time of "
+                      "minutes. The sigma of the biases excludes it: give the datasheet (`--noise`)."]
+        model = noise["model"]
+        if model and (model["unmodelled_acceleration_ug"] or model["unmodelled_rate_deg_h"]):
+            lines += ["", f"Errors outside the model, added to it: {model['unmodelled_acceleration_ug']:.3g} ug "
+                      f"per static segment, {model['unmodelled_rate_deg_h']:.3g} deg/h per static gyro mean."]
+    lines += ["", "## Checks", ""]
+    if data["checks"]:
+        lines.append(markdown_table(pd.DataFrame(data["checks"])[["name", "value", "limit", "passed", "detail"]],
+                                    "%.4g"))
+    lines.append(f"\nVariance factor applied to the covariance: {data['variance_factor']:.4g}")
+    if data["strongest_correlations"]:
+        lines += ["", "## Most correlated parameters", "",
+                  markdown_table(pd.DataFrame(data["strongest_correlations"]), "%+.3f")]
+    moving = [m for m in data["base_motion"] if m["significant"]]
+    if moving:
+        lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
+    return "\n".join(lines) + "\n"
+
+
+def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
+    """``NAME.report.json`` and ``NAME.report.md`` beside a parameter table ``NAME.csv``."""
+    table_path = Path(table_path)
+    stem = table_path.with_suffix("")
+    return stem.with_name(stem.name + ".report.json"), stem.with_name(stem.name + ".report.md")
+
+
+def report_files(result: CalibrationResult, rec: Recording, table_path: str | Path, report_dir: str | Path | None = None,
+                 truth: ParameterSet | None = None, command: str | None = None,
+                 unit_id: str | None = None) -> dict[Path, bytes]:
+    """Every file of a calibration's report, as ``{path: content}`` (written together by the caller)."""
+    data = report_data(result, rec, truth, command, unit_id)
+    json_path, md_path = companion_paths(table_path)
+    text = report_markdown(data)
+    files = {json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
+             md_path: text.encode()}
+    if report_dir is not None:
+        out = Path(report_dir)
+        stem = f"{rec.file_stem}-{result.solver}"
+        files[out / f"{stem}-report.md"] = text.encode()
+        files[out / f"{stem}-report.json"] = files[json_path]
+        files.update(calibration_tables(result, out / stem, rec.name, truth))
+        files[out / f"{stem}-residuals.png"] = residual_plot(result, rec)
+        files[out / f"{stem}-allan.png"] = noise_plot(result, rec)
+    return files
+
+
+def _json_default(value):
+    """NumPy values in JSON."""
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    return str(value)

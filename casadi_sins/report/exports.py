@@ -1,0 +1,142 @@
+"""Exports of a parameter table in the forms units load: compensation matrices, and the PSINS layout.
+
+Compensation form (JSON or YAML), per sensor: the increments from the raw pulses of one sample,
+
+    dtheta = M_g dN_g + c_g dt,    M = K^-1 diag(S),   c = -K^-1 B          (eq. 1 inverted)
+    dv     = M_a dN_a + c_a dt
+
+with ``K^-1``, ``S`` and ``B`` also given separately (SI: rad, m/s, per pulse; rad/s, m/s^2), the
+sigma of every parameter, the extra terms when estimated, and a metadata block (unit id, date,
+software, the recording's hash).
+
+PSINS layout (text): the fields of the toolbox's ``clbt`` struct as MATLAB assignments, such that
+its compensation ``wm' = Kg*wm - eb*ts``, ``vm' = Ka*vm - db*ts`` applied to increments in rad and
+m/s made with the nominal pulse sizes (``wm = p_g dN_g``) gives our compensated increments:
+``Kg = K_g^-1 diag(S_g) / p_g``, ``eb = K_g^-1 B_g`` (likewise Ka, db).  The extra terms follow the
+toolbox's signs (``Ka2 = -k2``; lever arms ``rx, ry`` are compensation values, minus the
+accelerometers' positions; ``tGA`` the time offset) as worked out for the peer file in
+the PSINS 19-position peer recording (``docs/recording-format.md``).
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+
+import numpy as np
+
+from ..core.version import __version__
+from ..model.extras import psins_fields
+from ..model.output import sensor_matrices
+from ..model.parameters import ParameterSet
+from ..model.registry import N_PARAMS, unit_of
+
+
+def compensation(params: ParameterSet, metadata: dict | None = None) -> dict:
+    """The compensation form of a parameter set as plain data."""
+    k_a, s_a, b_a, k_g, s_g, b_g = (np.asarray(m, dtype=float) for m in sensor_matrices(params.core))
+    sigma = dict(zip(params.names, params.sigma)) if params.sigma is not None else {}
+    out = {"format": "casadi-sins-compensation/1",
+           "metadata": {"software": f"casadi-sins {__version__}",
+                        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                        **(metadata or {})},
+           "model": "dtheta = M_g dN_g + c_g dt, dv = M_a dN_a + c_a dt; M = K^-1 diag(S), c = -K^-1 B "
+                    "(Kang et al. 2013, eq. 1 inverted); SI units"}
+    for sensor, k, s, b, unit, rate in (("gyro", k_g, s_g, b_g, "rad", "rad/s"),
+                                        ("accel", k_a, s_a, b_a, "m/s", "m/s^2")):
+        k_inv = np.linalg.inv(k)
+        out[sensor] = {"M": (k_inv @ np.diag(s.ravel())).tolist(), "c": (-k_inv @ b.ravel()).tolist(),
+                       "K_inverse": k_inv.tolist(), "scale": s.ravel().tolist(), "bias": b.ravel().tolist(),
+                       "units": {"M": f"{unit}/pulse", "c": rate, "scale": f"{unit}/pulse", "bias": rate}}
+    out["parameters"] = [{"parameter": n, "unit": unit_of(n), "value": float(v),
+                          "sigma": None if n not in sigma or not np.isfinite(sigma[n]) else float(sigma[n])}
+                         for n, v in zip(params.names, params.values)]
+    if params.extras:
+        out["extras"] = {n: float(v) for n, v in zip(params.names[N_PARAMS:], params.values[N_PARAMS:])}
+    return out
+
+
+def to_json(data: dict) -> str:
+    """The compensation form as JSON text."""
+    return json.dumps(data, indent=2) + "\n"
+
+
+def to_yaml(data, indent: int = 0) -> str:
+    """Plain YAML of nested dicts, lists and numbers (no dependency; lists of numbers in flow style)."""
+    pad = "  " * indent
+    lines = []
+    if isinstance(data, dict):
+        for key, value in data.items():
+            if isinstance(value, (dict, list)) and not _flat(value):
+                lines.append(f"{pad}{key}:")
+                lines.append(to_yaml(value, indent + 1).rstrip("\n"))
+            else:
+                lines.append(f"{pad}{key}: {_scalar(value)}")
+    else:
+        for item in data:
+            if isinstance(item, dict):
+                first = True
+                for key, value in item.items():
+                    lines.append(f"{pad}{'- ' if first else '  '}{key}: {_scalar(value)}")
+                    first = False
+            else:
+                lines.append(f"{pad}- {_scalar(item)}")
+    return "\n".join(lines) + "\n"
+
+
+def _flat(value) -> bool:
+    return isinstance(value, list) and all(not isinstance(v, dict) for v in value)
+
+
+def _scalar(value) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(_scalar(v) for v in value) + "]"
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float, np.floating)):
+        return repr(float(value))
+    return json.dumps(str(value))
+
+
+def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_accel: float | None = None,
+               metadata: dict | None = None) -> str:
+    """The PSINS ``clbt`` struct as MATLAB text (see the module docstring for the convention)."""
+    k_a, s_a, b_a, k_g, s_g, b_g = (np.asarray(m, dtype=float) for m in sensor_matrices(params.core))
+    p_g = float(pulse_gyro or np.mean(s_g))
+    p_a = float(pulse_accel or np.mean(s_a))
+
+    def mat(m):
+        m = np.atleast_2d(m)
+        return "[" + "; ".join(" ".join(f"{x + 0.0:.15g}" for x in row) for row in m) + "]"  # no -0
+
+    k_g_inv, k_a_inv = np.linalg.inv(k_g), np.linalg.inv(k_a)
+    lines = [f"% PSINS clbt struct from casadi-sins {__version__}",
+             f"% wm = {p_g:.15g} * dN_g (rad), vm = {p_a:.15g} * dN_a (m/s); then wm' = Kg*wm - eb*ts, "
+             "vm' = Ka*vm - db*ts"]
+    lines += [f"% {k}: {v}" for k, v in (metadata or {}).items()]
+    lines += [f"clbt.Kg = {mat(k_g_inv @ np.diag(s_g.ravel()) / p_g)};",
+              f"clbt.eb = {mat((k_g_inv @ b_g.ravel())[:, None])};",
+              f"clbt.Ka = {mat(k_a_inv @ np.diag(s_a.ravel()) / p_a)};",
+              f"clbt.db = {mat((k_a_inv @ b_a.ravel())[:, None])};"]
+    extra = psins_fields(params.as_dict())
+    lines += [f"clbt.Ka2 = {mat(extra['Ka2'][:, None])};  % s^2/m",
+              f"clbt.rx = {mat(extra['rx'][:, None])}; clbt.ry = {mat(extra['ry'][:, None])}; "
+              "clbt.rz = [0; 0; 0];  % m",
+              f"clbt.tGA = {extra['tGA']:.15g};  % s"]
+    return "\n".join(lines) + "\n"
+
+
+EXPORTS = {"json": ("compensation.json", lambda p, meta: to_json(compensation(p, meta))),
+           "yaml": ("compensation.yaml", lambda p, meta: to_yaml(compensation(p, meta))),
+           "psins": ("clbt.m", lambda p, meta: psins_clbt(p, metadata=meta))}
+
+
+def export_files(params: ParameterSet, table_path, formats, metadata: dict) -> dict:
+    """``{path: content}`` of the exports beside a table ``NAME.csv``: ``NAME.compensation.json`` ..."""
+    from pathlib import Path
+
+    stem = Path(table_path).with_suffix("")
+    meta = {k: v for k, v in metadata.items() if v is not None}
+    return {stem.with_name(f"{stem.name}.{EXPORTS[f][0]}"): EXPORTS[f][1](params, meta).encode() for f in formats}

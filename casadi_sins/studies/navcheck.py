@@ -1,0 +1,69 @@
+"""The paper's navigation check (section 2.3): free-inertial navigation of a fresh static recording.
+
+A fresh static recording is simulated (the problem's sensors, truth and noise, one level position),
+each parameter table is applied, the unit is aligned on the first minutes (eq. 14) and then navigates
+free-inertially (:mod:`nav.free_inertial`).  The horizontal position error after 1 h is what the paper
+reports (< 1 nmile for its real product).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..calibrate.initial import rough_parameters
+from ..data.problem import GroupPlan, Problem, Timing
+from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
+from ..report.plots import pyplot, save_figure
+from ..report.tables import write_frame
+from ..sim import simulate
+
+def navigation_problem(problem: Problem, duration_s: float = 3600.0, align_s: float = 300.0,
+                       orientation: str = "ENU") -> Problem:
+    """One static position: ``align_s`` of alignment, then ``duration_s`` of navigation."""
+    timing = Timing(static_s=align_s + duration_s, rotation_s=1.0, rate_profile=problem.timing.rate_profile)
+    return dataclasses.replace(problem, name=f"{problem.name}-navcheck", groups=(GroupPlan(orientation, ()),),
+                               timing=timing)
+
+
+def navigation_check(problem: Problem, tables: dict[str, np.ndarray], seed: int = 0, duration_s: float = 3600.0,
+                     align_s: float = 300.0) -> tuple[list[NavigationRun], pd.DataFrame]:
+    """Navigate a fresh static recording with each parameter table (plus the rough values and the truth)."""
+    sim = simulate(navigation_problem(problem, duration_s, align_s), seed=seed)
+    rec = sim.recording
+    sets = {"rough initial values": _rough_for(problem, seed), **tables, "truth": sim.truth.values}
+    runs = [navigate_free(rec, values, align_s, label) for label, values in sets.items()]
+    rows = [{"parameters": run.label, "horizontal error at end (m)": run.horizontal_m[-1],
+             "horizontal error at end (nmi)": run.horizontal_m[-1] / NAUTICAL_MILE,
+             "max horizontal error (nmi)": run.horizontal_m.max() / NAUTICAL_MILE} for run in runs]
+    return runs, pd.DataFrame(rows)
+
+
+def _rough_for(problem: Problem, seed: int) -> np.ndarray:
+    """The rough initial values the paper would start from: those of a calibration recording."""
+    return rough_parameters(simulate(problem, seed=seed).recording).values
+
+
+def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: str) -> Path:
+    """Horizontal position error of each run against time (log scale, nmi)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(9, 5))
+    for run in runs:
+        ax.semilogy(run.time / 60, np.maximum(run.horizontal_m, 1e-3) / NAUTICAL_MILE, label=run.label)
+    ax.axhline(1.0, color="k", ls=":", lw=0.8, label="1 nmile")
+    ax.set_xlabel("time of free-inertial navigation (min)")
+    ax.set_ylabel("horizontal position error (nmile)")
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return save_figure(fig, path)
+
+
+def write_navigation_check(runs, table: pd.DataFrame, out_dir: str | Path, name: str) -> None:
+    """The check's table (CSV, Markdown) and plot."""
+    out_dir = Path(out_dir)
+    write_frame(table, out_dir / f"{name}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration")
+    plot_navigation_check(runs, out_dir / f"{name}-navcheck.png",
+                          f"{name}: horizontal position error, static base, after alignment")

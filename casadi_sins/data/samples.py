@@ -104,24 +104,31 @@ def _read_rows(data_path: Path, columns: list[str]) -> np.ndarray:
     rows = []
     with io.TextIOWrapper(open_binary(data_path), encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle, skipinitialspace=True)
-        next(reader, None)
-        for row in reader:
-            line = reader.line_num
-            if not row or row == [""]:
-                continue
-            if len(row) != len(columns):
-                raise InputError(data_path, f"{len(row)} fields, the header has {len(columns)}", line=line)
-            values = []
-            for j in take:
-                try:
-                    value = float(row[j])
-                except ValueError:
-                    value = float("nan")
-                if not math.isfinite(value):
-                    raise InputError(data_path, f"{shown(row[j])} is not a finite number", line=line, column=columns[j])
-                values.append(value)
-            rows.append(values)
-    return np.array(rows, dtype=float).reshape(-1, len(COLUMNS))
+        try:
+            next(reader, None)
+            for row in reader:
+                rows.append(_row_values(data_path, columns, take, row, reader.line_num))
+        except csv.Error as exc:  # an unmatched quote runs a field over many lines
+            raise InputError(data_path, f"not a CSV row ({exc})", line=reader.line_num) from None
+    return np.array([r for r in rows if r is not None], dtype=float).reshape(-1, len(COLUMNS))
+
+
+def _row_values(data_path: Path, columns: list[str], take: list[int], row: list[str], line: int):
+    """The format's values of one row (``None`` for a blank row); an error names the line and column."""
+    if not row or row == [""]:
+        return None
+    if len(row) != len(columns):
+        raise InputError(data_path, f"{len(row)} fields, the header has {len(columns)}", line=line)
+    values = []
+    for j in take:
+        try:
+            value = float(row[j])
+        except ValueError:
+            value = float("nan")
+        if not math.isfinite(value):
+            raise InputError(data_path, f"{shown(row[j])} is not a finite number", line=line, column=columns[j])
+        values.append(value)
+    return values
 
 
 def _check_time(data_path: Path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:

@@ -22,7 +22,10 @@ COLUMNS = ("time", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"
 def oracle(text: str) -> np.ndarray | None:
     """The (N, 7) numbers a strict reader must find in a CSV text, or ``None`` when the text is no valid
     CSV of samples (missing or repeated column, a row of another width, a value that is not a finite float)."""
-    rows = list(csv.reader(io.StringIO(text, newline=""), skipinitialspace=True))
+    try:
+        rows = list(csv.reader(io.StringIO(text, newline=""), skipinitialspace=True))
+    except csv.Error:
+        return None
     if not rows:
         return None
     header = [c.strip() for c in rows[0]]

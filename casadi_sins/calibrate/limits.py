@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.parameters import CORRELATION_LIMIT, ParameterSet, separation
+from .result import Check
+
 #: Relative tolerance of the noise model on top of the sampling error of a variance factor.
 MODEL_TOLERANCE = 0.15
 #: Standard normal quantile of the checks (99.9 %, one-sided).
@@ -19,3 +22,34 @@ def factor_limit(dof: float) -> float:
     """Upper limit of a variance factor with ``dof`` degrees of freedom (chi-square, 99.9 %, plus the model
     tolerance)."""
     return 1.0 + Z_LIMIT * np.sqrt(2.0 / max(dof, 1.0)) + MODEL_TOLERANCE
+
+
+def factor_low(dof: float) -> float:
+    """Lower limit of a variance factor with ``dof`` degrees of freedom (chi-square, 0.1 %, less the model
+    tolerance): a fit this much better than its noise model means the model is too large."""
+    return max(0.0, 1.0 - Z_LIMIT * np.sqrt(2.0 / max(dof, 1.0)) - MODEL_TOLERANCE)
+
+
+def separation_warnings(params: ParameterSet) -> tuple[list[Check], list[str]]:
+    """Checks and warnings of an estimate's separability: weak parameters, inseparable pairs, condition.
+
+    Returns ``(checks, warnings)``.
+    """
+    found = separation(params)
+    checks = [Check("parameters determined by the schedule", float(len(found.weak)), 0.0, not found.weak,
+                    "parameters whose sigma exceeds about 1 % of what is known before calibration: "
+                    + (", ".join(f"{n} {s:.3g} {u}" for n, s, u in found.weak) or "none")),
+              Check("parameters separated by the schedule", float(len(found.correlated)), 0.0, not found.correlated,
+                    f"pairs correlated beyond {CORRELATION_LIMIT}; condition number of the correlations "
+                    f"{found.condition:.3g}")]
+    warnings = []
+    if found.weak:
+        warnings.append("the schedule does not determine " + ", ".join(f"{n} (sigma {s:.3g} {u})"
+                                                                       for n, s, u in found.weak[:8])
+                        + (", ..." if len(found.weak) > 8 else "") + ": turn the unit about more axes or longer")
+    if found.correlated:
+        warnings.append("the schedule cannot separate " + ", ".join(f"{a} from {b} (correlation {c:+.4f})"
+                                                                   for a, b, c in found.correlated[:5])
+                        + (", ..." if len(found.correlated) > 5 else "")
+                        + f" (condition number {found.condition:.3g}): their sum is known, not each one")
+    return checks, warnings

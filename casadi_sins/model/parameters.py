@@ -152,3 +152,48 @@ class ParameterSet:
             frame["error_natural"] = natural_errors(self, truth)
             frame["natural_unit"] = natural
         return frame
+
+
+#: Correlations above this (in absolute value) mean two parameters are not separated by the schedule.
+CORRELATION_LIMIT = 0.99
+
+
+@dataclasses.dataclass
+class Separation:
+    """How well a covariance separates its parameters.
+
+    Attributes
+    ----------
+    weak : list of (name, sigma, unit)
+        Parameters whose natural-unit sigma exceeds their group's ``weak_level``.
+    correlated : list of (name, name, correlation)
+        Pairs correlated beyond :data:`CORRELATION_LIMIT`, strongest first.
+    condition : float
+        Condition number of the correlation matrix.
+    """
+
+    weak: list
+    correlated: list
+    condition: float
+
+    @property
+    def separated(self) -> bool:
+        """No weak parameter and no pair correlated beyond the limit."""
+        return not self.weak and not self.correlated
+
+
+def separation(params: ParameterSet) -> Separation:
+    """Weak parameters and inseparable pairs of an estimate's covariance (see :class:`Separation`)."""
+    if params.covariance is None:
+        return Separation([], [], float("nan"))
+    sigma = params.natural_sigma()
+    weak = [(n, float(s), natural_unit_of(n)) for n, s in zip(params.names, sigma) if s > group_of(n).weak_level]
+    sd = np.sqrt(np.clip(np.diag(params.covariance), 1e-300, None))
+    corr = params.covariance / np.outer(sd, sd)
+    n = len(params.names)
+    pairs = sorted(((abs(corr[i, j]), i, j) for i in range(n) for j in range(i + 1, n)
+                    if abs(corr[i, j]) > CORRELATION_LIMIT), reverse=True)
+    correlated = [(params.names[i], params.names[j], float(corr[i, j])) for _, i, j in pairs]
+    eig = np.linalg.eigvalsh(0.5 * (corr + corr.T))
+    condition = float(eig[-1] / max(eig[0], 1e-300))
+    return Separation(weak, correlated, condition)

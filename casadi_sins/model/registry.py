@@ -61,6 +61,9 @@ class ParameterGroup:
         Seen only through the velocity steps across rotations.
     drop_rank : int or None
         Extra groups the schedule cannot separate are dropped in increasing rank (weakest seen first).
+    weak_level : float
+        A 1-sigma above this (natural units) means the schedule does not determine the parameter: about
+        1 % of what is known of it before any calibration (a navigation-grade unit's rough values).
     """
 
     key: str
@@ -78,6 +81,7 @@ class ParameterGroup:
     correction: Callable | None = None
     needs_rotation_steps: bool = False
     drop_rank: int | None = None
+    weak_level: float = 5.0
 
 
 def _axes(prefix: str, axes=("x", "y", "z")) -> tuple[str, ...]:
@@ -92,7 +96,7 @@ GROUPS: dict[str, ParameterGroup] = {g.key: g for g in (
                    value_unit="m/s/pulse", value_scale=1.0, meaning="S_a: accelerometer pulse weight"),
     ParameterGroup("accel_misalign", "accel misalignment", _axes("accel_misalign", ("yx", "zx", "zy")), "rad",
                    "arcsec", ARCSEC, meaning="K_a lower off-diagonal (row = sensor axis, column)"),
-    ParameterGroup("gyro_bias", "gyro bias", _axes("gyro_bias"), "rad/s", "deg/h", DEG_PER_H,
+    ParameterGroup("gyro_bias", "gyro bias", _axes("gyro_bias"), "rad/s", "deg/h", DEG_PER_H, weak_level=0.01,
                    meaning="B_g: gyro bias"),
     ParameterGroup("gyro_scale", "gyro scale", _axes("gyro_scale"), "rad/pulse", "ppm", PPM, relative=True,
                    value_unit="arcsec/pulse", value_scale=ARCSEC, meaning="S_g: gyro pulse weight"),
@@ -112,7 +116,7 @@ GROUPS: dict[str, ParameterGroup] = {g.key: g for g in (
                    drop_rank=0,
                    meaning="position of the x (y) accelerometer along its own axis: seen only through the centripetal "
                            "term, -(w_y^2 + w_z^2) p_x; single-axis turns make it one with the time offset"),
-    ParameterGroup("timing", "gyro/accel time offset", ("accel_time_offset",), "s", "ms", 1e-3, core=False,
+    ParameterGroup("timing", "gyro/accel time offset", ("accel_time_offset",), "s", "ms", 1e-3, core=False, weak_level=0.2,
                    correction=extras.timing_correction, needs_rotation_steps=True, drop_rank=2,
                    meaning="the accelerometer samples describe the specific force this much later than the gyro "
                            "samples (f -> f - tau w x f)"),

@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 
+from ..core.units import ARW_UNIT, VRW_UNIT
 from ..data.recording import Recording
 from ..model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
 from .motion import SegmentMotion, base_motion
@@ -25,6 +26,7 @@ class NoisePlan:
     model: SensorNoise  # in use: given, else raw where determined, else fitted
     source: dict[str, str]  # term -> "datasheet" | "raw data" | "fit" | "not modelled"
     motions: list[SegmentMotion]
+    warnings: list[str] = dataclasses.field(default_factory=list)  # a datasheet the data contradict
 
     def free_terms(self) -> dict[str, list[str]]:
         """Terms the fit must set, by residual kind they show in most."""
@@ -37,6 +39,7 @@ def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None 
     raw = estimate_sensor_noise(rec, reference)
     given = given or SensorNoise()
     determined = raw.model()
+    given, warnings = _check_datasheet(given, determined, raw)
     bounds = raw.upper_bounds()
     model = SensorNoise(
         gyro_arw=_first(given.gyro_arw, determined.gyro_arw, np.maximum(bounds.gyro_arw, GYRO_ARW_FLOOR)),
@@ -58,7 +61,30 @@ def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None 
                "gyro_bias_instability": "datasheet" if given.gyro_bias_instability is not None else "not modelled",
                "accel_bias_instability": "datasheet" if given.accel_bias_instability is not None else "not modelled"}
     motions = base_motion(rec, reference, model)
-    return NoisePlan(raw, given, model, sources, motions)
+    return NoisePlan(raw, given, model, sources, motions, warnings)
+
+
+#: A datasheet's white-noise density more than this factor away from the raw data's determined estimate
+#: contradicts the data (the estimate is within a few per cent; datasheets round, units differ by 60).
+DATASHEET_TOLERANCE = 2.0
+
+
+def _check_datasheet(given: SensorNoise, determined: SensorNoise, raw: RawNoise) -> tuple[SensorNoise, list[str]]:
+    """Datasheet white-noise terms the raw data contradict are replaced by the data's, with a warning naming both."""
+    warnings = []
+    given = dataclasses.replace(given)
+    for term, label, unit, scale in (("gyro_arw", "angle random walk", "deg/sqrt(h)", ARW_UNIT),
+                                     ("accel_vrw", "velocity random walk", "ug/sqrt(Hz)", VRW_UNIT)):
+        stated, measured = getattr(given, term), getattr(determined, term)
+        if stated is None or measured is None or not np.all(measured > 0):
+            continue
+        ratio = float(np.max(np.maximum(stated / measured, measured / np.maximum(stated, 1e-300))))
+        if ratio > DATASHEET_TOLERANCE:
+            warnings.append(f"the datasheet's {label} {np.mean(stated) / scale:.3g} {unit} contradicts the "
+                            f"{np.mean(measured) / scale:.3g} {unit} measured in the raw data ({ratio:.3g} times): "
+                            "the measured value is used (check the datasheet's units and the unit)")
+            setattr(given, term, None)
+    return given, warnings
 
 
 def _first(*values):

@@ -190,6 +190,7 @@ def report_markdown(data: dict) -> str:
         if model and (model["unmodelled_acceleration_ug"] or model["unmodelled_rate_deg_h"]):
             lines += ["", f"Errors outside the model, added to it: {model['unmodelled_acceleration_ug']:.3g} ug "
                       f"per static segment, {model['unmodelled_rate_deg_h']:.3g} deg/h per static gyro mean."]
+    lines += _model_lines(data.get("model"))
     lines += ["", "## Checks", ""]
     if data["checks"]:
         lines.append(markdown_table(pd.DataFrame(data["checks"])[["name", "value", "limit", "passed", "detail"]],
@@ -202,6 +203,20 @@ def report_markdown(data: dict) -> str:
     if moving:
         lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
     return "\n".join(lines) + "\n"
+
+
+def _model_lines(model: dict | None) -> list[str]:
+    """The parameter model and, with ``--model auto``, the selection of each extra group (Markdown lines)."""
+    if not model:
+        return []
+    extras = model.get("extra_groups") or []
+    lines = ["", "## Parameter model", "",
+             f"- estimated: the 21 of eq. 1{' + ' + ', '.join(extras) if extras else ''}; terms not estimated are at "
+             "their prior (0)"]
+    for key, choice in (model.get("selection") or {}).items():
+        lines.append(f"- {key}: Wald statistic {choice['statistic']:.3g} against {choice['threshold']:.3g} "
+                     f"(k ln n): {'kept' if choice['selected'] else 'left at 0'}")
+    return lines
 
 
 def companion_paths(table_path: str | Path) -> tuple[Path, Path]:

@@ -35,9 +35,8 @@ from ..report.tables import write_frame
 from ..sim import simulate
 
 #: A parameter is reported weakly observable when its predicted sigma exceeds this many times the
-#: best one of its group (natural units), or these absolute levels.
+#: best one of its group (natural units), or its group's ``weak_level`` (:mod:`model.registry`).
 WEAK_RATIO = 3.0
-WEAK_LEVEL = {"ug": 5.0, "ppm": 5.0, "arcsec": 5.0, "deg/h": 0.01}
 
 
 @dataclasses.dataclass
@@ -59,8 +58,6 @@ class Prediction:
         return frame
 
 
-#: Weak levels of the extra groups' natural units (mm, ms, ug/g^2).
-WEAK_LEVEL.update({"mm": 5.0, "ms": 0.2, "ug/g^2": 5.0})
 
 
 def predict(rec: Recording, nominal, noise: SensorNoise, name: str | None = None, model="21") -> Prediction:
@@ -87,16 +84,15 @@ def predict(rec: Recording, nominal, noise: SensorNoise, name: str | None = None
     covariance = cov_z[:n, :n] * np.outer(scale, scale)
     sigma_nat = np.sqrt(np.diag(cov_z)[:n])
     weak = []
-    ranges = [(sl, unit) for _, sl, unit in CORE_SPANS]
+    spans = [sl for _, sl, _ in CORE_SPANS]
     offset = N_PARAMS
     for key in groups_in(names):
-        group = GROUPS[key]
-        ranges.append((slice(offset, offset + len(group.names)), group.natural_unit))
-        offset += len(group.names)
-    for sl, unit in ranges:
+        spans.append(slice(offset, offset + len(GROUPS[key].names)))
+        offset += len(GROUPS[key].names)
+    for sl in spans:
         best = sigma_nat[sl].min()
         for i in range(sl.start, sl.stop):
-            if sigma_nat[i] > WEAK_RATIO * best or sigma_nat[i] > WEAK_LEVEL[unit]:
+            if sigma_nat[i] > WEAK_RATIO * best or sigma_nat[i] > group_of(names[i]).weak_level:
                 weak.append(names[i])
     return Prediction(name or rec.name, ParameterSet(nominal, covariance=covariance, names=names), sigma_nat,
                       weak, noise)

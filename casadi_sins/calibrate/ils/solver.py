@@ -45,8 +45,8 @@ from ...model.registry import N_PARAMS, NAMES, NATURAL_SCALE, NATURAL_UNITS, SCA
 from ...noise.motion import describe_motion
 from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
-from ..limits import factor_limit
-from ..result import CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
+from ..limits import factor_limit, factor_low, separation_warnings
+from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
 from .covariance import equation_covariance
 from .equations import build_equations, solve_equations
 
@@ -130,11 +130,18 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     else:
         raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
-    inflate = _variance_factor(factor, len(b) - N_PARAMS, warnings)
+    dof = len(b) - N_PARAMS
+    inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
+    checks = [Check("equations vs noise model", factor, factor_limit(dof), factor_low(dof) <= factor <= factor_limit(dof),
+                    f"chi-square per degree of freedom of the {len(b)} equations ({dof} degrees of freedom), "
+                    f"noise from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", factor_low(dof))]
+    separation_checks, separation_text = separation_warnings(result)
+    checks += separation_checks
+    warnings += noise_plan.warnings + separation_text
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
-                             float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, [],
+                             float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
                              inflate, NoiseReport(noise_plan.model, noise_plan.raw, None, dict(noise_plan.source)),
                              noise_plan.motions,
                              ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
@@ -172,6 +179,10 @@ def _variance_factor(factor: float, dof: int, warnings: list[str]) -> float:
     Scaling it by the equations' own variance factor (27 degrees of freedom) was measured to be
     overconfident in 4 of 50 runs (beyond 4.5 sigma), the bound is not.
     """
+    if factor < factor_low(dof):
+        warnings.append(f"the equations' residuals are {1 / np.sqrt(max(factor, 1e-300)):.3g} times smaller than the "
+                        f"sensor noise ({dof} degrees of freedom): the noise model is too large")
+        return 1.0
     if factor <= factor_limit(dof):
         return 1.0
     warnings.append(f"the equations' residuals are {np.sqrt(factor):.3g} times the sensor noise ({dof} degrees "

@@ -24,7 +24,7 @@ import numpy as np
 from ...model.noise import SensorNoise
 from ...noise.observations import ObservationKind
 from ...noise.plan import NoisePlan
-from ..limits import Z_LIMIT, factor_limit
+from ..limits import Z_LIMIT, factor_limit, factor_low
 from ..result import Check
 from .gls import GLS_LINEAR_STEP, Fit
 from .graph import ResidualGraph
@@ -43,6 +43,7 @@ class Assessment:
     factors: dict[str, float] = dataclasses.field(default_factory=dict)
     variance_factor: float = 1.0
     fitted_noise: SensorNoise | None = None
+    too_good: dict[str, float] = dataclasses.field(default_factory=dict)  # kinds whose residuals are far below
     model_fails: bool = False  # residuals beyond the model: velocity, gyro, drift or rotation-step check failed
 
     def add(self, check: Check, warning: str | None = None, inflate: float | None = None,
@@ -78,25 +79,47 @@ def assess(graph: ResidualGraph, fit: Fit, noise_plan: NoisePlan) -> Assessment:
                   "(the last one, in the linear region, is applied without another evaluation)"),
             f"the generalised least squares did not settle (last step {steps[-1]:.3g} sigma)")
     out.fitted_noise = fitted_noise(fit.noise, out.factors)
+    if len(out.too_good) == len(out.factors) and out.variance_factor == 1.0:
+        # every kind's residuals far below the model: the model is too large, the data say by how much
+        out.variance_factor = max(out.too_good.values())
+        out.warnings.append(f"sigma scaled down by {np.sqrt(out.variance_factor):.3g} to the residuals' own noise")
     return out
+
+
+def _source_of(noise_plan: NoisePlan, label: str, free: list[str]) -> str:
+    """Where the white noise of a residual kind came from, for the check's detail."""
+    if free:
+        return f"{', '.join(free)} set by the fit within the raw data's bound"
+    term = "accel_vrw" if label == "velocity" else "gyro_arw"
+    return noise_plan.source.get(term, "raw data")
 
 
 def _kind_factors(out: Assessment, graph: ResidualGraph, fit: Fit, noise_plan: NoisePlan) -> None:
     """Velocity and gyro-mean residuals against the noise model."""
     rw, leverage = fit.whitened_residuals, fit.leverage
+    # once errors outside the model were given a place in it, its size is the fit's own (REML): no lower limit
+    two_sided = not (fit.noise.unmodelled_acceleration or fit.noise.unmodelled_rate or fit.noise.unmodelled_step)
     for label, kind in (("velocity", ObservationKind.VELOCITY), ("gyro", ObservationKind.GYRO_MEAN)):
         rows = graph.observations.rows_of(kind)
         dof = float(rows.sum() - leverage[rows].sum())
         factor = float(np.sum(rw[rows] ** 2) / dof) if dof > 0.5 else 1.0
         out.factors[label] = factor
         free = noise_plan.free_terms()[label]
-        limit = factor_limit(dof)
+        limit, low = factor_limit(dof), factor_low(dof) if two_sided else 0.0
+        source = _source_of(noise_plan, label, free)
         detail = (f"{label} residuals {np.sqrt(factor):.3g} times the noise model ({dof:.0f} degrees of freedom; "
-                  + (f"{', '.join(free)} set by the fit within the raw data's bound)" if free else "raw data)"))
-        out.add(Check(f"{label} residuals vs noise model", factor, limit, factor <= limit, detail),
-                f"the {label} residuals are {np.sqrt(factor):.3g} times larger than the sensor noise measured in the "
-                "raw data: errors outside the model (model mismatch, base motion, drift); sigma inflated by "
-                f"{np.sqrt(factor):.3g}", inflate=factor, beyond_model=True)
+                  f"noise from {source})")
+        check = Check(f"{label} residuals vs noise model", factor, limit, low <= factor <= limit, detail, low)
+        if factor > limit:
+            out.add(check, f"the {label} residuals are {np.sqrt(factor):.3g} times larger than the sensor noise "
+                    f"({source}): errors outside the model (model mismatch, base motion, drift); sigma inflated by "
+                    f"{np.sqrt(factor):.3g}", inflate=factor, beyond_model=True)
+        else:
+            out.add(check, f"the {label} residuals are {1 / np.sqrt(max(factor, 1e-300)):.3g} times smaller than the "
+                    f"sensor noise ({source}): the noise model is too large (a datasheet above the unit's noise, or a "
+                    "counter's quantization taken for white noise?)")
+            if factor < low:
+                out.too_good[label] = factor
 
 
 def _drift(out: Assessment, graph: ResidualGraph, fit: Fit) -> None:
@@ -142,16 +165,17 @@ def _whiteness(out: Assessment, graph: ResidualGraph, rw: np.ndarray) -> None:
 def _group_chi_square(out: Assessment, graph: ResidualGraph, fit: Fit) -> None:
     """Chi-square of each group; a warning when one group fits much worse than the rest."""
     rw, leverage = fit.whitened_residuals, fit.leverage
+    two_sided = not (fit.noise.unmodelled_acceleration or fit.noise.unmodelled_rate or fit.noise.unmodelled_step)
     for group in np.unique(graph.observations.group):
         rows = graph.observations.group == group
         dof = float(rows.sum() - leverage[rows].sum())
         factor = float(np.sum(rw[rows] ** 2) / max(dof, 1.0))
-        limit = factor_limit(dof)
+        limit, low = factor_limit(dof), factor_low(dof) if two_sided else 0.0
         worse = factor > max(out.factors.values()) * 1.2
-        out.add(Check(f"group {group} chi-square", factor, limit, factor <= limit,
-                      f"whitened residuals of group {group}, {dof:.0f} degrees of freedom"),
+        out.add(Check(f"group {group} chi-square", factor, limit, low <= factor <= limit,
+                      f"whitened residuals of group {group}, {dof:.0f} degrees of freedom", low),
                 (f"group {group} fits {np.sqrt(factor):.3g} times worse than the noise: a disturbance in that group "
-                 "(handling, shock)?") if worse else None)
+                 "(handling, shock)?") if worse and factor > limit else None)
 
 
 def drift_statistic(graph: ResidualGraph, rw: np.ndarray, basis: np.ndarray) -> tuple[float, float]:

@@ -102,3 +102,17 @@ def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Noise
         q = float(np.max(model.accel_quantization))
         terms["accel_quantization"] = (q, q / 10.0, q * 10.0)
     return estimate_terms(system, columns, model, terms)
+
+
+def unmodelled_at_bounds(noise: SensorNoise) -> list[str]:
+    """Warnings for unmodelled terms that reached the top of their search range: the errors outside the model
+    are larger than it can represent, and the sigma may not cover them."""
+    out = []
+    for name, value, (_, high), unit, scale in (
+            ("unmodelled acceleration", noise.unmodelled_acceleration, UNMODELLED_ACCELERATION_RANGE, "m/s^2", 1.0),
+            ("unmodelled rate", noise.unmodelled_rate, UNMODELLED_RATE_RANGE, "rad/s", 1.0),
+            ("unmodelled step", noise.unmodelled_step, UNMODELLED_STEP_RANGE, "m/s", 1.0)):
+        if value >= 0.9 * high:
+            out.append(f"the {name} reached its bound ({value / scale:.3g} of at most {high:g} {unit}): the errors "
+                       "outside the model are beyond what it can represent; this table is not to be trusted")
+    return out

@@ -29,13 +29,14 @@ from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
 from ...noise.motion import describe_motion
 from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
+from ..limits import separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
 from .ipopt import quick_weights
-from .likelihood import estimate_unmodelled
+from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import model_groups, model_label, select_groups, unobservable_group
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
@@ -76,12 +77,15 @@ class _Run:
         return graph
 
     def fit(self, graph: ResidualGraph, use_rotation_steps: bool) -> Fit:
-        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress, **self.solve)
+        solve = dict(self.solve)
+        if solve["max_iterations"] is None:
+            solve["max_iterations"] = max(200, 20 * graph.n_variables)
+        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress, **solve)
 
 
 def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
                   static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
-                  use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int = 100,
+                  use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int | None = None,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
                   static_step_s: float | None = None, model="21") -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
@@ -106,8 +110,10 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
         of a real unit make velocity steps that the 21-parameter model cannot explain.
     tolerance : float
         Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
-    max_iterations : int
-        Ipopt's iteration cap (3-5 are typical; far-off starts take more).
+    max_iterations : int, optional
+        Ipopt's iteration cap; default ``max(200, 20 x variables)`` (3-5 iterations are typical; starts far
+        off nominal and unmodelled errors take more, and a cap is only a guard against a run that never
+        ends).
     progress : callable, optional
         Receives one line per stage.
     noise : SensorNoise, optional
@@ -238,6 +244,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     assessment = assess(graph, fit, run.noise_plan)
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
+    run.warnings += unmodelled_at_bounds(unmodelled)
     run.warnings.append(f"the residuals exceeded the sensor noise ({'; '.join(failed)}): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
                         f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "
@@ -263,7 +270,11 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     run.say(f"noise model: ARW {_fmt(nat['gyro_arw_deg_rth'])} deg/sqrt(h) ({run.noise_plan.source['gyro_arw']}), "
             f"VRW {_fmt(nat['accel_vrw_ug_rthz'])} ug/sqrt(Hz) ({run.noise_plan.source['accel_vrw']}); variance "
             f"factors velocity {assessment.factors['velocity']:.3g}, gyro {assessment.factors['gyro']:.3g}")
-    warnings = run.warnings + assessment.warnings
+    params = ParameterSet(values, covariance=covariance, names=names)
+    separation_checks, separation_text = separation_warnings(params)
+    assessment.checks += separation_checks
+    assessment.warnings += separation_text
+    warnings = run.warnings + run.noise_plan.warnings + assessment.warnings
     for message in assessment.warnings:
         run.say(f"warning: {message}")
     stats = fit.ipopt_stats
@@ -273,7 +284,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
                          fit.whitened_residuals, white)
     status, message = outcome(warnings, int(stats["iter_count"]))
     return CalibrationResult(
-        ParameterSet(values, covariance=covariance, names=names), "nlp", True, status, message,
+        params, "nlp", True, status, message,
         int(stats["iter_count"]), run.initial, [reference, values],
         float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
         warnings, assessment.checks, assessment.variance_factor,

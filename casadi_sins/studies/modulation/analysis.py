@@ -205,7 +205,8 @@ def analyse(schemes: list[Scheme], sources: Sources, site: Site, hours: float, s
     reference = run_scheme(STRAPDOWN, with_start(STRAPDOWN), site, hours, step_deg, max_step_s)
     results = {}
     for scheme in schemes:
-        results[scheme.name] = (reference if not scheme.steps and np.allclose(scheme.start, np.eye(3))
+        same = not scheme.steps and not scheme.initial_dwell and np.allclose(scheme.start, np.eye(3))
+        results[scheme.name] = (dataclasses.replace(reference, scheme=scheme) if same  # the reference's numbers
                                 else run_scheme(scheme, with_start(scheme), site, hours, step_deg, max_step_s))
     doc = {
         "latitude_deg": round(site.latitude / units.DEG, 9),

@@ -65,8 +65,9 @@ def test_a_run_writes_json_markdown_and_plots(tmp_path, capsys):
 def test_a_shipped_sheet_by_name(tmp_path, capsys):
     code, out, err = run(capsys, *base(tmp_path, scheme="strapdown", errors="guan2023-table1", hours=0.5))
     assert code == 0, err
-    assert json.loads((tmp_path / "out" / "modulation.json").read_text())["errors"]["origin"] == \
-        "guan2023-table1 (shipped)"
+    doc = json.loads((tmp_path / "out" / "modulation.json").read_text())
+    assert doc["errors"]["origin"] == "guan2023-table1 (shipped)"
+    assert doc["schemes"]["strapdown"]["source"] == "strapdown (shipped)"  # the reference's numbers, its own name
 
 
 def test_a_scheme_that_does_not_return_warns_and_strict_refuses(tmp_path, capsys):

@@ -91,7 +91,7 @@ class Sources:
     origin : str
         Where the errors came from (files), for the report.
     transform : ndarray (31, 31) or None
-        None: the initial errors as given; else the map of an alignment (:meth:`aligned`).
+        None: the initial errors as given; else the map of an alignment (:meth:`Sources.aligned`).
     """
 
     name: str

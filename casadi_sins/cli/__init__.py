@@ -23,7 +23,8 @@ from .commands import CliError
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
-FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo"}
+FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
+                  "modulate-mc"}
 
 __all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
 

@@ -8,6 +8,7 @@ from ..core.version import __version__
 from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_budget, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
                        cmd_navcheck, cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
+from .modulation import cmd_modulate, cmd_modulate_mc
 
 
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
@@ -133,4 +134,52 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--out", default="runs/demo", help="output folder (default runs/demo; the published "
                    "results/ are made by benchmarks/regenerate_results.sh)")
     p.set_defaults(func=cmd_demo)
+    _add_modulation(sub)
     return parser
+
+
+def _modulation_common(p: argparse.ArgumentParser) -> None:
+    """The options ``modulate`` and ``modulate-mc`` share: schemes, errors, site, run length, output."""
+    p.add_argument("--scheme", nargs="+", required=True, metavar="NAME|FILE",
+                   help="rotation schemes: names of shipped ones (strapdown, single-axis-reciprocating, "
+                   "dual-axis-16, yu-ruan2014-improved, ...) or scheme files (TOML, format casadi-sins-scheme/1)")
+    p.add_argument("--errors", metavar="SHEET", help="error sheet: a file (TOML, format casadi-sins-errors/1, "
+                   "natural units) or a shipped name (guan2023-table1, yu-ruan2014-sim)")
+    p.add_argument("--params", metavar="P.csv", help="calibrated parameter table: its sigma (or its covariance) are "
+                   "the residual sensor errors; the initial errors and noise come from --errors, if given")
+    p.add_argument("--covariance", metavar="C.csv", help="full covariance of the --params table (square CSV, header "
+                   "parameter,<names>, SI; default: the \"covariance\" of NAME.report.json beside the table, if any)")
+    p.add_argument("--hours", type=float, required=True, help="length of the run, h")
+    p.add_argument("--latitude", type=float, required=True, help="latitude of the static site, deg")
+    p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
+    p.add_argument("--initial", choices=("sheet", "aligned"), default="sheet",
+                   help="initial attitude error: the sheet's alone (default, as Guan et al. 2023), or a static "
+                   "alignment at each scheme's start attitude (correlated with the sensor errors) plus the sheet's")
+    p.add_argument("--strict", action="store_true", help="a warning (a scheme that does not return to its start "
+                   "attitude after one period) is a failure")
+    p.add_argument("--out", required=True, help="output folder")
+
+
+def _add_modulation(sub) -> None:
+    """The rotation-modulation commands (issue 19)."""
+    p = sub.add_parser("modulate", help="navigation error of a static INS under rotation schemes, by error source "
+                       "(covariance): modulation.json, .md and plots")
+    _modulation_common(p)
+    p.add_argument("--turn-step-deg", type=float, default=5.0,
+                   help="largest integration sub-step of a turn, deg (0.01-22.5, default 5)")
+    p.add_argument("--output-step-s", type=float, default=60.0,
+                   help="largest output interval in a dwell, s (default 60)")
+    p.add_argument("--no-plots", action="store_true", help="write modulation.json and .md only")
+    p.set_defaults(func=cmd_modulate)
+    p = sub.add_parser("modulate-mc", help="time-domain Monte Carlo of the rotation modulation against its "
+                       "covariance, per error source: montecarlo.json and .md")
+    _modulation_common(p)
+    p.add_argument("--runs", type=int, default=50, help="runs per error source (default 50)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--turn-step-deg", type=float, default=1.0,
+                   help="navigation step in a turn, deg (0.01-22.5, default 1)")
+    p.add_argument("--plain", action="store_true",
+                   help="plain random draws of the constant errors (default: moment-matched, see docs/modulation.md)")
+    p.add_argument("--workers", type=int, default=1,
+                   help="local worker processes, one scheme each (default 1)")
+    p.set_defaults(func=cmd_modulate_mc)

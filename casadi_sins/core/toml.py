@@ -22,7 +22,7 @@ def read_toml(path: str | Path, what: str) -> dict:
 
 def array_table_lines(text: str, name: str) -> list[int]:
     """1-based line numbers of the headers ``[[name]]`` in a TOML text, in order."""
-    pattern = re.compile(rf"^\s*\[\[\s*{re.escape(name)}\s*\]\]", re.MULTILINE)
+    pattern = re.compile(rf"^[ \t]*\[\[[ \t]*{re.escape(name)}[ \t]*\]\]", re.MULTILINE)  # not across lines
     return [text.count("\n", 0, m.start()) + 1 for m in pattern.finditer(text)]
 
 

@@ -1,0 +1,183 @@
+"""A calibrated parameter table as the error sources of the modulation analysis.
+
+The residual errors of a calibrated unit are the uncertainty of its table (``read_table``): the sigma
+column, or the full covariance when one is known:
+
+* ``--covariance C.csv``: a square CSV, header ``parameter,<names>``, one row per name, in the SI units
+  of the table (the 21 names, or every name of the table);
+* otherwise the companion report ``NAME.report.json`` beside the table ``NAME.csv``, when it has a
+  ``"covariance"`` key: a list of lists in SI, rows and columns in the table's parameter order.
+
+Either must be symmetric, positive semi-definite and have the table's sigma as its diagonal root.
+Scale-factor errors are relative (``t_ii``), so the covariance of the values is divided by the values
+(as :mod:`casadi_sins.studies.budget` does).  Extra groups of an extended table (quadratic scale,
+lever arms, time offset) are not in the modulation model and are left out.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ...core.errors import InputError, shown
+from ...core.inputs import check_input_file
+from ...data.tables import read_table
+from ...model.registry import NAMES, relative_mask
+from ...report.calibration import companion_paths
+from . import model as M
+from .sources import Sources
+
+#: A covariance CSV or report of a few dozen parameters is small.
+MAX_COVARIANCE_BYTES = 20_000_000
+
+
+def check_psd(cov: np.ndarray, path) -> None:
+    """Refuse a covariance that is not symmetric positive semi-definite.
+
+    Raises
+    ------
+    InputError
+        Naming ``path``.
+    """
+    if not np.allclose(cov, cov.T, rtol=1e-9, atol=0.0):
+        raise InputError(path, "the covariance is not symmetric")
+    eig = np.linalg.eigvalsh(cov)
+    if eig.min() < -1e-9 * max(eig.max(), 0.0):
+        raise InputError(path, f"the covariance is not positive semi-definite (smallest eigenvalue {eig.min():.3g})")
+
+
+def read_covariance_csv(path, names: tuple[str, ...]) -> np.ndarray:
+    """A square covariance CSV (header ``parameter,<names>``) in the order of ``names``.
+
+    Its rows and columns must be the same names: ``names`` itself, or the 21 of them.
+
+    Raises
+    ------
+    InputError
+        Naming the file and line at fault.
+    """
+    path = Path(path)
+    check_input_file(path, "covariance CSV", MAX_COVARIANCE_BYTES)
+    try:
+        with open(path, encoding="utf-8", newline="") as handle:
+            rows = [(k, row) for k, row in enumerate(csv.reader(handle), start=1) if row and row != [""]]
+    except UnicodeDecodeError as exc:
+        raise InputError(path, f"not UTF-8 text ({exc.reason})") from None
+    except csv.Error as exc:
+        raise InputError(path, f"not a CSV covariance ({exc})") from None
+    if not rows:
+        raise InputError(path, "empty: expected a header parameter,<names> and one row per name")
+    header = [c.strip() for c in rows[0][1][1:]]
+    labels = [row[0].strip() for _, row in rows[1:]]
+    usable = {tuple(names), NAMES}
+    if len(set(header)) != len(header) or set(header) != set(labels) or not any(set(header) == set(u) for u in usable):
+        raise InputError(path, "rows and columns must be the same parameter names, those of the table or the 21",
+                         line=1)
+    matrix = np.zeros((len(header), len(header)))
+    for i, (line, row) in enumerate(rows[1:]):
+        if len(row) != len(header) + 1:
+            raise InputError(path, f"{len(row)} fields, the header has {len(header) + 1}", line=line)
+        try:
+            matrix[i] = [float(x) for x in row[1:]]
+        except ValueError:
+            raise InputError(path, f"row {labels[i]!r} has an entry that is not a number", line=line) from None
+    if not np.all(np.isfinite(matrix)):
+        raise InputError(path, "the covariance has non-finite entries")
+    order = [labels.index(n) for n in header]  # rows in the header's order
+    return _reorder(matrix[order], header, names)
+
+
+def _reorder(matrix: np.ndarray, given: list[str], names: tuple[str, ...]) -> np.ndarray:
+    """A covariance over ``given`` names as one over ``names`` (zero where ``given`` lacks a name)."""
+    out = np.zeros((len(names), len(names)))
+    pos = [names.index(n) for n in given]
+    out[np.ix_(pos, pos)] = matrix
+    return out
+
+
+def report_covariance(table_path, names: tuple[str, ...]) -> tuple[np.ndarray | None, Path | None]:
+    """The covariance in the companion report ``NAME.report.json`` of the table ``NAME.csv``, if any.
+
+    Returns
+    -------
+    (ndarray (n, n) or None, Path or None)
+        The matrix (rows in the table's order ``names``, SI) and the report it came from; ``(None,
+        None)`` when there is no report or it has no ``"covariance"`` key.
+
+    Raises
+    ------
+    InputError
+        Naming the report when it cannot be read or its covariance is not an n x n list of finite numbers.
+    """
+    path = companion_paths(table_path)[0]
+    if not path.exists():
+        return None, None
+    check_input_file(path, "calibration report", MAX_COVARIANCE_BYTES)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise InputError(path, f"not a JSON calibration report ({shown(str(exc), 120)})") from None
+    if not isinstance(doc, dict) or "covariance" not in doc:
+        return None, None
+    raw, n = doc["covariance"], len(names)
+    if not (isinstance(raw, list) and len(raw) == n and all(isinstance(r, list) and len(r) == n for r in raw)):
+        raise InputError(path, f"\"covariance\" must be a list of {n} lists of {n} numbers (the table's parameters)")
+    if any(isinstance(x, bool) or not isinstance(x, (int, float)) for r in raw for x in r):
+        raise InputError(path, "\"covariance\" has an entry that is not a number")
+    matrix = np.array(raw, dtype=float)
+    if not np.all(np.isfinite(matrix)):
+        raise InputError(path, "\"covariance\" has non-finite entries")
+    return matrix, path
+
+
+def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sources:
+    """Residual errors of a calibrated table: its sigma, or its full covariance (error-state form:
+    scale factors relative), with the initial errors and noise of ``sheet`` (none without a sheet).
+
+    Parameters
+    ----------
+    table : str or Path
+        The parameter table CSV (with sigma).
+    covariance : str or Path, optional
+        A covariance CSV; without it, the covariance of ``NAME.report.json`` beside the table, if any.
+    sheet : Sources, optional
+
+    Raises
+    ------
+    InputError
+        Naming the table, the covariance file or the report at fault.
+    """
+    table = Path(table)
+    params = read_table(table)
+    names = params.names
+    if params.sigma is None or np.any(np.isnan(params.sigma[: len(NAMES)])):
+        missing = NAMES if params.sigma is None else [n for n, s in zip(names, params.sigma) if math.isnan(s)]
+        raise InputError(table, f"no sigma for {', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}: the "
+                         "residual errors are the table's uncertainty (a calibrated table has a sigma column)")
+    cov, where = np.diag(np.nan_to_num(params.sigma) ** 2), None
+    if covariance is not None:
+        cov, where = read_covariance_csv(covariance, names), Path(covariance)
+    else:
+        found, report = report_covariance(table, names)
+        if found is not None:
+            cov, where = found, report
+    if where is not None:
+        check_psd(cov, where)
+        if not np.allclose(np.sqrt(np.diag(cov))[: len(NAMES)], params.sigma[: len(NAMES)], rtol=1e-3, atol=0.0):
+            raise InputError(where, f"its diagonal does not match the sigma of {table}")
+    idx = [names.index(n) for n in NAMES]
+    values, cov = params.values[idx], cov[np.ix_(idx, idx)]
+    scale = np.where(relative_mask(NAMES), np.abs(values), 1.0)
+    if np.any(scale == 0):
+        raise InputError(table, "a scale factor of zero")
+    p0 = np.zeros((M.N_STATE, M.N_STATE)) if sheet is None else sheet.p0.copy()
+    p0[M.N_NAV:M.N_NAV + len(NAMES), M.N_NAV:M.N_NAV + len(NAMES)] = cov / np.outer(scale, scale)
+    zero = np.zeros(3)
+    extra = f" (extra groups left out: {', '.join(names[len(NAMES):])})" if len(names) > len(NAMES) else ""
+    return Sources(table.stem, p0, zero if sheet is None else sheet.gyro_arw,
+                   zero if sheet is None else sheet.accel_vrw, correlated=where is not None,
+                   origin=str(table) + (f" + {where}" if where is not None else "") + extra)

@@ -133,18 +133,26 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     dof = len(b) - N_PARAMS
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
-    checks = [Check("equations vs noise model", factor, factor_limit(dof), factor_low(dof) <= factor <= factor_limit(dof),
-                    f"chi-square per degree of freedom of the {len(b)} equations ({dof} degrees of freedom), "
-                    f"noise from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", factor_low(dof))]
-    separation_checks, separation_text = separation_warnings(result)
-    checks += separation_checks
-    warnings += noise_plan.warnings + separation_text
+    checks = _checks(result, factor, len(b), noise_plan, warnings)
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
                              float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
                              inflate, NoiseReport(noise_plan.model, noise_plan.raw, None, dict(noise_plan.source)),
                              noise_plan.motions,
                              ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
+
+
+def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str]
+            ) -> list[Check]:
+    """The equations' chi-square (two-sided) and the separability checks; their warnings into ``warnings``."""
+    dof = equations - N_PARAMS
+    low, limit = factor_low(dof), factor_limit(dof)
+    checks = [Check("equations vs noise model", factor, limit, low <= factor <= limit,
+                    f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom), noise "
+                    f"from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", low)]
+    separation_checks, separation_text = separation_warnings(result)
+    warnings += noise_plan.warnings + separation_text
+    return checks + separation_checks
 
 
 def _check_applicable(rec: Recording, model) -> None:

@@ -14,6 +14,8 @@ import functools
 import casadi as ca
 import numpy as np
 
+from .compiled import Mapped
+
 
 def skew(v) -> np.ndarray:
     """Cross-product matrix: ``skew(a) @ b == np.cross(a, b)``."""
@@ -109,18 +111,17 @@ def quat_to_dcm_expr(q):
 
 
 @functools.lru_cache(maxsize=None)
-def _quat_to_dcm_function() -> ca.Function:
+def _quat_to_dcm_mapped() -> Mapped:
     q = ca.SX.sym("q", 4)
-    return ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm_expr(q))])
+    return Mapped(ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm_expr(q))]))
 
 
 def quat_to_dcm(q) -> np.ndarray:
     """:func:`quat_to_dcm_expr` evaluated for one quaternion (4,) -> (3, 3) or many (N, 4) -> (N, 3, 3)."""
     q = np.asarray(q, dtype=float)
     single = q.ndim == 1
-    q = np.atleast_2d(q)
-    flat = np.asarray(_quat_to_dcm_function().map(len(q))(q.T))
-    out = flat.T.reshape(len(q), 3, 3).transpose(0, 2, 1)  # vec() is column-major
+    flat = _quat_to_dcm_mapped()(np.atleast_2d(q))
+    out = flat.reshape(len(flat), 3, 3).transpose(0, 2, 1)  # vec() is column-major
     return out[0] if single else out
 
 

@@ -17,13 +17,25 @@ obey, on a static base in ENU (eqs. 13-21)::
 
 The alignment errors (eq. 15) follow from linearising the one alignment
 function (:mod:`nav.alignment`).  Everything here is linear in
-``x``: the functions return sensitivity matrices with 21 columns.
+``x``: the functions return sensitivity matrices with 21 columns.  Along a navigated group the model
+is propagated sample by sample by one CasADi step (:func:`sensitivity_step_function`), compiled
+(:mod:`core.compiled`)::
+
+    phi_k = R phi_(k-1) - C_k G_g(dtheta_k),    R = exp(-[w_ie x] dt)   (exact for -w_ie x phi)
+    dv_k  = dv_(k-1) + f^n_k dt x (phi_(k-1) + phi_k) / 2 + C_k G_a(dv_k)
+
+with ``C_k`` the attitude in the middle of the sample and ``G`` the increment errors' sensitivities
+(:func:`input_sensitivity`).
 """
 
 from __future__ import annotations
 
+import functools
+
+import casadi as ca
 import numpy as np
 
+from ..core.compiled import StepChain
 from ..core.rotations import quat_to_dcm, rotation_matrix
 from ..data.recording import Recording
 from ..model.registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GYRO_BIAS,
@@ -32,22 +44,31 @@ from .alignment import alignment_error
 from .navigation import GroupNavigation, compensated_increments
 
 
-def input_sensitivity(increments: np.ndarray, dt: float, sensor: str) -> np.ndarray:
-    """``d(increment error)/dx`` per sample, shape (N, 3, 21), for ``sensor`` ``"gyro"`` or ``"accel"``.
-
-    ``increments`` (N, 3) are the compensated increments (``omega dt`` or ``f dt``).
-    """
-    n = len(increments)
-    g = np.zeros((n, 3, N_PARAMS))
+def _error_columns(sensor: str) -> list[tuple[int, int, int]]:
+    """``(column, axis i, input component j or -1)`` of a sensor's error terms: the increment error of axis
+    ``i`` from the term of ``column`` is ``dt`` (``j = -1``, a bias) or the increment's component ``j``."""
     if sensor == "gyro":
         bias, scale, misalign, entries = GYRO_BIAS, GYRO_SCALE, GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES
     else:
         bias, scale, misalign, entries = ACCEL_BIAS, ACCEL_SCALE, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES
-    for i in range(3):
-        g[:, i, bias.start + i] = dt
-        g[:, i, scale.start + i] = increments[:, i]
-    for m, (i, j) in enumerate(entries):
-        g[:, i, misalign.start + m] = increments[:, j]
+    columns = [(bias.start + i, i, -1) for i in range(3)] + [(scale.start + i, i, i) for i in range(3)]
+    return columns + [(misalign.start + m, i, j) for m, (i, j) in enumerate(entries)]
+
+
+def input_sensitivity(increments, dt, sensor: str):
+    """``d(increment error)/dx`` per sample, shape (N, 3, 21), for ``sensor`` ``"gyro"`` or ``"accel"``.
+
+    ``increments`` (N, 3) are the compensated increments (``omega dt`` or ``f dt``).  With a CasADi
+    3-vector of increments the result is the (3, 21) CasADi matrix of that one sample.
+    """
+    if isinstance(increments, (ca.SX, ca.MX)):
+        g = ca.SX(3, N_PARAMS) if isinstance(increments, ca.SX) else ca.MX(3, N_PARAMS)
+        for column, i, j in _error_columns(sensor):
+            g[i, column] = dt if j < 0 else increments[j]
+        return g
+    g = np.zeros((len(increments), 3, N_PARAMS))
+    for column, i, j in _error_columns(sensor):
+        g[:, i, column] = dt if j < 0 else increments[:, j]
     return g
 
 
@@ -58,35 +79,55 @@ def alignment_sensitivity(dtheta: np.ndarray, dv: np.ndarray, dt: float) -> np.n
     return alignment_error(dv.mean(axis=0) / dt, dtheta.mean(axis=0) / dt, d_means)
 
 
+@functools.lru_cache(maxsize=None)
+def sensitivity_step_function() -> ca.Function:
+    """One sample of the error model (module docstring) with its 21 sensitivities, for a compiled chain::
+
+        state = [phi (3 x 21), dv (3 x 21)],  const = [R (9, column-major), dt]
+        data  = [C_k (9, column-major), dtheta (3), dv (3), f^n dt (3)]  ->  (state next, const, dv next)
+    """
+    state, const, data = ca.SX.sym("s", 3, 2 * N_PARAMS), ca.SX.sym("const", 10), ca.SX.sym("data", 18)
+    phi, dvs = state[:, :N_PARAMS], state[:, N_PARAMS:]
+    r, dt = ca.reshape(const[:9], 3, 3), const[9]
+    c = ca.reshape(data[:9], 3, 3)
+    force = data[15:18]
+    phi_next = r @ phi - c @ input_sensitivity(data[9:12], dt, "gyro")
+    mid = 0.5 * (phi + phi_next)
+    cross = ca.vertcat(force[1] * mid[2, :] - force[2] * mid[1, :], force[2] * mid[0, :] - force[0] * mid[2, :],
+                       force[0] * mid[1, :] - force[1] * mid[0, :])
+    dv_next = dvs + cross + c @ input_sensitivity(data[12:15], dt, "accel")
+    return ca.Function("sensitivity_step", [state, const, data], [ca.horzcat(phi_next, dv_next), const, dv_next])
+
+
+@functools.lru_cache(maxsize=None)
+def sensitivity_chain() -> StepChain:
+    """:func:`sensitivity_step_function` compiled, as a chain over the samples of a group."""
+    return StepChain("sensitivity", "error model step", sensitivity_step_function)
+
+
 def velocity_sensitivity(rec: Recording, nav: GroupNavigation, params: np.ndarray) -> np.ndarray:
     """``d(velocity error)/dx`` after each sample of a navigated group, shape (N, 3, 21).
 
-    Propagates the error model above along the navigated attitude.  The
-    ``-w_ie x phi`` term is solved exactly: with ``R(t) = exp(-[w_ie x] t)``,
-    ``phi_k = R(t_k) (phi_0 - sum_j R(t_j)^T C_j d_theta_j)``.
+    Propagates the error model (module docstring) along the navigated attitude from the alignment's
+    error (eq. 15).  ``f^n dt`` is the navigation's own velocity change less gravity (rotation terms
+    included), not ``C_(k-1) dv_k``, which during a rotation carries a spurious horizontal part of
+    order ``g w dt / 2``.
     """
     dt = rec.dt
     dtheta, dv = compensated_increments(rec, params, nav.samples)
     first = rec.segment_samples(rec.group_segments(nav.group)[0])
     local = slice(first.start - nav.samples.start, first.stop - nav.samples.start)
     phi0 = alignment_sensitivity(dtheta[local], dv[local], dt)
-
     c_after = quat_to_dcm(nav.quaternion)
-    c_before = np.concatenate([nav.initial_attitude[None], c_after[:-1]])
-    c_mid = 0.5 * (c_before + c_after)
-    gyro_nav = c_mid @ input_sensitivity(dtheta, dt, "gyro")  # (N, 3, 21)
-    accel_nav = c_mid @ input_sensitivity(dv, dt, "accel")
-
+    c_mid = 0.5 * (np.concatenate([nav.initial_attitude[None], c_after[:-1]]) + c_after)
     w_ie = rec.site.earth_rate
-    rate = np.linalg.norm(w_ie)
-    t = (np.arange(len(dtheta)) + 1) * dt
-    earth_turn = rotation_matrix(w_ie, -rate * t)  # R(t_k), (N, 3, 3)
-    accumulated = np.cumsum(np.swapaxes(earth_turn, 1, 2) @ gyro_nav, axis=0)
-    phi = earth_turn @ (phi0[None] - accumulated)
-    phi_mid = 0.5 * (np.concatenate([phi0[None], phi[:-1]]) + phi)
-    # f^n dt as the navigation computed it (rotation terms included), not C_{k-1} dv_k, which during a
-    # rotation carries a spurious horizontal part of order g w dt / 2
+    earth_turn = rotation_matrix(w_ie, -np.linalg.norm(w_ie) * dt)
     velocity = np.concatenate([np.zeros((1, 3)), nav.velocity])
     force_dt = np.diff(velocity, axis=0) + np.array([0.0, 0.0, rec.site.g * dt])
-    dv_dot = np.cross(force_dt[:, :, None], phi_mid, axis=1) + accel_nav
-    return np.cumsum(dv_dot, axis=0)
+    n = len(dtheta)
+    data = np.empty((n, 18))
+    data[:, :9] = np.swapaxes(c_mid, 1, 2).reshape(n, 9)  # column-major C per row
+    data[:, 9:12], data[:, 12:15], data[:, 15:18] = dtheta, dv, force_dt
+    state0 = np.hstack([phi0, np.zeros((3, N_PARAMS))])
+    out, _ = sensitivity_chain()(state0, np.concatenate([earth_turn.ravel(order="F"), [dt]]), data)
+    return out.reshape(n, N_PARAMS, 3).transpose(0, 2, 1)

@@ -2,20 +2,22 @@
 
 Each group is navigated from its own coarse alignment on its first static segment (or a given start
 attitude) with a parameter vector; the numbers come from the same step ``Function`` the estimator
-differentiates.
+differentiates, compiled (:mod:`core.compiled`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
+from ..core.compiled import StepChain
 from ..core.rotations import dcm_to_quat, quat_to_dcm
 from ..data.recording import Recording
 from ..model.output import compensate
 from .alignment import align
-from .strapdown import Q, V, chain_function
+from .strapdown import Q, V, sample_step_function
 
 
 @dataclasses.dataclass
@@ -74,8 +76,15 @@ def navigate_group(rec: Recording, group: int, params, initial_attitude: np.ndar
         initial_attitude = align(dth[local], dv[local], rec.dt)
     x0 = np.concatenate([dcm_to_quat(initial_attitude), np.zeros(3), dth[0], dv[0]])
     wdt, gdt = navigation_constants(rec)
-    states = np.asarray(chain_function(len(dth))(x0, dth.T, dv.T, wdt, gdt, 1.0)).T
+    states, _ = navigation_chain()(x0, np.concatenate([wdt, gdt]), np.hstack([dth, dv]))
     return GroupNavigation(group, span, rec.time[span], states[:, V], states[:, Q], np.asarray(initial_attitude))
+
+
+@functools.lru_cache(maxsize=None)
+def navigation_chain() -> StepChain:
+    """The strapdown step per sample (:func:`strapdown.sample_step_function`), compiled, as a chain over rows of
+    ``(dtheta, dv)`` with ``(earth_rate_dt, gravity_dt)`` constant; every state (N, 13) out."""
+    return StepChain("navigation", "sample step", sample_step_function)
 
 
 def navigate(rec: Recording, params, initial_attitudes: dict[int, np.ndarray] | None = None

@@ -13,9 +13,10 @@ only.  One step from sample ``k-1`` to ``k`` (quaternion ``q = q_b^n``, velocity
 Without the second-order rotation term a 90 deg rotation at 14 deg/s peak leaves a velocity step of
 (h^2 g / 6) int w^2 dt = 5e-5 m/s along gravity; with it, the step is exact to O(h^3) for rotation
 about a fixed axis.  The half-step n-frame rotation in the velocity update puts the Earth-rate
-correction at the middle of the interval (physics pitfall 4).  Chained with ``mapaccum`` the step is
-the numeric navigation (:mod:`nav.navigation`), and the same object is the symbolic graph of the
-estimator (:mod:`calibrate.nlp.graph`).
+correction at the middle of the interval (physics pitfall 4).  Packed per sample
+(:func:`sample_step_function`) and compiled (:mod:`core.compiled`) the step is the numeric navigation
+(:mod:`nav.navigation`); with its forward derivative (:mod:`nav.tangent`) it is the estimator's graph
+(:mod:`calibrate.nlp.graph`).
 """
 
 from __future__ import annotations
@@ -76,7 +77,12 @@ def step_function() -> ca.Function:
                        ["x", "dtheta", "dv", "earth_rate_dt", "gravity_dt", "previous_scale"], ["x_next"])
 
 
-@functools.lru_cache(maxsize=32)
-def chain_function(n_steps: int) -> ca.Function:
-    """``n_steps`` strapdown steps chained with ``mapaccum``; returns every intermediate state."""
-    return step_function().mapaccum("strapdown_chain", n_steps)
+@functools.lru_cache(maxsize=None)
+def sample_step_function() -> ca.Function:
+    """The step of one sample packed for a compiled chain (:class:`core.compiled.StepChain`)::
+
+        (x[13], const = (earth_rate_dt[3], gravity_dt[3]), data = (dtheta[3], dv[3])) -> (x_next, const, x_next)
+    """
+    x, const, data = ca.SX.sym("x", STATE_SIZE), ca.SX.sym("const", 6), ca.SX.sym("data", 6)
+    x_next = step_expr(x, data[0:3], data[3:6], const[0:3], const[3:6], 1)
+    return ca.Function("strapdown_sample_step", [x, const, data], [x_next, const, x_next])

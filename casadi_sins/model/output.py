@@ -18,8 +18,8 @@ import functools
 import casadi as ca
 import numpy as np
 
-from .registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GYRO_BIAS, GYRO_MISALIGN,
-                       GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, SCALE_MASK)
+from .registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GROUPS, GYRO_BIAS,
+                       GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, SCALE_MASK, groups_in)
 
 
 def sensor_matrices(p):
@@ -66,6 +66,24 @@ def compensate_expr(dn_g, dn_a, p, dt, accel_correction=None):
     sensed = ca.diag(s_a) @ dn_a - b_a @ dt
     dv = ca.solve(k_a, sensed if accel_correction is None else sensed + accel_correction)
     return dtheta, dv
+
+
+def accel_correction_expr(extra_values, names, regressors):
+    """The extra groups' correction ``c`` (3 x M) of :func:`compensate_expr`'s accelerometer increments.
+
+    ``extra_values`` are the values (CasADi) of ``names`` (the extra parameters, in order), ``regressors``
+    the (15, M) regressors of the steps (:mod:`model.extras`); ``None`` when there are no extra names.
+    """
+    present = groups_in(names)
+    if not present:
+        return None
+    values = {name: extra_values[i] for i, name in enumerate(names)}
+    rows = [0 * regressors[0, :] for _ in range(3)]
+    for key in present:
+        group = GROUPS[key]
+        for i, term in enumerate(group.correction({n: values[n] for n in group.names if n in values}, regressors)):
+            rows[i] = rows[i] + term
+    return ca.vertcat(*rows)
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,4 +1,4 @@
-"""The estimator's symbolic graph: every group navigated by the one strapdown step, and its residuals.
+"""The estimator's graph: every group navigated by the one strapdown step, and its residuals.
 
 Decision variables
     the parameters as deviations from a reference (the starting values) in natural units (ug, ppm of
@@ -8,7 +8,9 @@ Decision variables
 Graph
     the raw pulses of each step (:mod:`calibrate.steps`) enter through the one compensation
     expression (:func:`model.output.compensate_expr`, with the extra groups' corrections), and the one
-    strapdown step (:func:`nav.strapdown.step_function`) is chained with ``mapaccum``.
+    strapdown step (:func:`nav.strapdown.step_expr`) is chained in compiled blocks with its forward
+    derivative (:mod:`nav.tangent`).  The graph belongs to the schedule's *shape* and is built once per
+    shape (:mod:`.shape`); a recording binds its pulses to it as data.
 Residuals (:mod:`noise.observations`)
     the navigated velocity at observation times in the static segments (true velocity zero), and per
     static segment the mean compensated gyro rate against the Earth rate seen in the navigated
@@ -24,17 +26,16 @@ import time
 import casadi as ca
 import numpy as np
 
-from ...core.rotations import dcm_to_quat, quat_from_rotvec_expr, quat_multiply_expr, quat_to_dcm_expr
-from ...core.units import ARCSEC
+from ...core.compiled import Buffered
+from ...core.rotations import dcm_to_quat
 from ...data.recording import Recording
-from ...model.output import compensate_expr
-from ...model.registry import GROUPS, N_PARAMS, NAMES, groups_in, natural_scale_of, relative_mask
-from ...nav.navigation import group_alignment, navigation_constants
-from ...nav.strapdown import Q, V, step_function
+from ...model.registry import N_PARAMS, NAMES, natural_scale_of, relative_mask
+from ...nav.navigation import group_alignment
 from ...noise.kalman import GroupTrack
 from ...noise.observations import Observation, ObservationKind, ObservationTable
 from ..steps import ROTATION_STEP_S, GroupSteps, group_track, plan_steps
 from .regressors import sample_regressors, static_rates, step_regressors
+from .shape import ShapeGraph, group_data, group_layout, shape_graph
 
 
 def variable_scale(reference: np.ndarray, names=NAMES) -> np.ndarray:
@@ -50,30 +51,87 @@ def natural_to_parameters(z, reference: np.ndarray, names=NAMES):
     return reference + scale * np.asarray(z)
 
 
+class Linearisation:
+    """The residuals ``r`` (n,), their Jacobian ``J`` (n, variables) and the trajectory (4, steps) at ``z``
+    (read-only arrays)."""
+
+    def __init__(self, z: np.ndarray, r: np.ndarray, jac: np.ndarray, trajectory: np.ndarray):
+        self.z = z.copy()
+        self.r, self.jac, self.trajectory = r.ravel(), jac, trajectory
+        for array in (self.r, self.jac, self.trajectory):
+            array.flags.writeable = False
+
+    def at(self, z: np.ndarray) -> bool:
+        """Whether this is the linearisation at ``z`` (exactly)."""
+        return self.z.shape == np.shape(z) and bool(np.all(self.z == z))
+
+
 @dataclasses.dataclass
 class ResidualGraph:
-    """The built NLP: CasADi functions of the decision vector, and what each residual row is.
+    """The built NLP of one recording: its schedule shape's graph with the recording's data bound, and what
+    each residual row is.
 
     Residual rows, in time order per group: three per velocity observation (m/s, ENU) and three per
     static segment's mean gyro rate (rad/s, body), the latter after the segment's last velocity.
+    ``jacobian(z)`` keeps its linearisation: Ipopt's gradient and Hessian at one point, and the
+    generalised least squares at Ipopt's solution, share one evaluation.
     """
 
-    residuals: ca.Function  # w -> r
-    jacobian: ca.Function  # w -> (r, J)
-    trajectory: ca.Function  # w -> quaternions at every step end, all groups side by side (4, sum M)
-    n_variables: int
+    shape: ShapeGraph
+    data: np.ndarray
+    ref: np.ndarray  # the reference parameters, then their natural scales
     observations: ObservationTable
     groups: list[GroupSteps]
     reference: np.ndarray
     start_attitudes: dict[int, np.ndarray]
     build_time: float
     names: tuple[str, ...] = NAMES  # the parameters, in the order of the first variables
+    evaluations: dict = dataclasses.field(default_factory=lambda: {"jacobian": 0, "residuals": 0})
+
+    def __post_init__(self):
+        self._calls = {}
+        self._last: Linearisation | None = None
+
+    def _call(self, name: str, z) -> list[np.ndarray]:
+        if name not in self._calls:
+            self._calls[name] = _buffered(self.shape, name)
+        return self._calls[name](np.asarray(z, dtype=float), self.data, self.ref)
+
+    def linearise(self, z) -> Linearisation:
+        """Residuals, Jacobian and trajectory at ``z`` (the last one is kept)."""
+        z = np.asarray(z, dtype=float)
+        if self._last is None or not self._last.at(z):
+            self.evaluations["jacobian"] += 1
+            self._last = Linearisation(z, *self._call("jacobian", z))
+        return self._last
+
+    def jacobian(self, z) -> tuple[np.ndarray, np.ndarray]:
+        """``(r, J)`` at ``z``: residuals (n,) and Jacobian (n, variables)."""
+        lin = self.linearise(z)
+        return lin.r, lin.jac
+
+    def residuals(self, z) -> np.ndarray:
+        """Residuals (n,) at ``z``."""
+        if self._last is not None and self._last.at(np.asarray(z, dtype=float)):
+            return self._last.r
+        self.evaluations["residuals"] += 1
+        return self._call("residuals", z)[0].ravel()
+
+    def trajectory(self, z) -> np.ndarray:
+        """Quaternions at every step end, all groups side by side (4, sum M)."""
+        if self._last is not None and self._last.at(np.asarray(z, dtype=float)):
+            return self._last.trajectory
+        return self._call("trajectory", z)[0]
+
+    @property
+    def n_variables(self) -> int:
+        """Number of decision variables."""
+        return self.shape.n_variables
 
     @property
     def n_residuals(self) -> int:
         """Length of the residual vector."""
         return self.observations.n_rows
-
     @property
     def n_params(self) -> int:
         """Number of parameters (the first variables)."""
@@ -100,80 +158,51 @@ class ResidualGraph:
         return tracks
 
 
-def _accel_correction(all_params, names, regressors):
-    """The extra groups' correction of the accelerometer increments (3 x M), or ``None`` for the 21."""
-    present = groups_in(names)
-    if not present:
-        return None
-    values = {name: all_params[i] for i, name in enumerate(names)}
-    rows = [ca.DM.zeros(1, regressors.shape[1]) for _ in range(3)]
-    for key in present:
-        group = GROUPS[key]
-        for i, term in enumerate(group.correction({n: values[n] for n in group.names}, regressors)):
-            rows[i] = rows[i] + term
-    return ca.vertcat(*rows)
+def _buffered(shape: ShapeGraph, name: str) -> Buffered:
+    """One buffered caller per shape function (shared by the recordings of the shape)."""
+    calls = shape.__dict__.setdefault("_buffered", {})
+    if name not in calls:
+        calls[name] = Buffered(getattr(shape, name))
+    return calls[name]
 
 
-def _group_residuals(rec: Recording, plan: GroupSteps, states, dtheta, first_row: int):
-    """The residual expressions of one group and their observations."""
-    pieces, observations = [], []
+def _group_observations(plan: GroupSteps, first_row: int) -> list[Observation]:
+    """The observations of one group, in residual order (:mod:`.shape`)."""
+    observations = []
     row = first_row
     last_obs_of = {int(s): int(plan.observed[plan.segment_of == s][-1]) for s in np.unique(plan.segment_of)}
     for k, step in enumerate(plan.observed):
         seg_number = int(plan.segment_of[k])
-        pieces.append(states[V, int(step)])
         observations.append(Observation(ObservationKind.VELOCITY, row, plan.group, int(step), seg_number,
                                         bool(plan.after_rotation[k]), float(plan.samples_between[k]), k == 0))
         row += 3
         if step == last_obs_of[seg_number]:
-            # mean gyro rate of the static segment against the Earth rate seen in the navigated attitude
-            in_seg = plan.step_segment == seg_number
-            duration = float(plan.step_dt[in_seg].sum())
-            mean_rate = ca.sum2(dtheta[:, list(np.flatnonzero(in_seg))]) / duration
-            earth_in_body = quat_to_dcm_expr(states[Q, plan.middle_step(seg_number)]).T @ ca.DM(rec.site.earth_rate)
-            pieces.append(mean_rate - earth_in_body)
             observations.append(Observation(ObservationKind.GYRO_MEAN, row, plan.group, int(step), seg_number))
             row += 3
-    return ca.vertcat(*pieces), observations
+    return observations
 
 
 def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
                 names: tuple[str, ...] = NAMES) -> ResidualGraph:
-    """Build the symbolic NLP for a recording around ``reference`` parameters (ordered like ``names``: the
-    21, then any extra groups of the registry)."""
+    """The NLP of a recording around ``reference`` parameters (ordered like ``names``: the 21, then any
+    extra groups of the registry): its shape's graph (built once per shape) and the recording's data."""
     t0 = time.perf_counter()
-    n_params = len(names)
-    n_var = n_params + 3 * len(rec.group_ids)
-    w = ca.MX.sym("w", n_var)
-    all_params = natural_to_parameters(w[:n_params], reference, names)
-    if n_params > N_PARAMS:
+    names = tuple(names)
+    extended = len(names) > N_PARAMS
+    if extended:
         per_sample, boundary = sample_regressors(rec.gyro, rec.accel, reference, rec.dt, static_rates(rec, reference))
-    earth_dt, gravity_dt = navigation_constants(rec)
-    parts, trajectories, observations, plans, starts = [], [], [], [], {}
-    for gi, group in enumerate(rec.group_ids):
+    layouts, data, observations, plans, starts = [], [], [], [], {}
+    for group in rec.group_ids:
         plan = plan_steps(rec, group, observe_s, rotation_step_s, static_step_s)
         plans.append(plan)
         starts[group] = group_alignment(rec, group, reference)
-        correction = (_accel_correction(all_params, names, ca.DM(step_regressors(per_sample, boundary, plan.first,
-                                                                                 plan.stop)))
-                      if n_params > N_PARAMS else None)
-        dtheta, dv = compensate_expr(ca.DM(plan.pulses_gyro), ca.DM(plan.pulses_accel), all_params[:N_PARAMS],
-                                     ca.DM(plan.step_dt).T, correction)
-        rotvec = w[n_params + 3 * gi: n_params + 3 * gi + 3] * ARCSEC
-        x0 = ca.vertcat(quat_multiply_expr(quat_from_rotvec_expr(rotvec), ca.DM(dcm_to_quat(starts[group]))),
-                        ca.DM.zeros(3), dtheta[:, 0], dv[:, 0])
-        chain = step_function().mapaccum("strapdown_chain", len(plan.step_dt))
-        ratio = plan.step_dt[None, :] / rec.dt
-        states = chain(x0, dtheta, dv, ca.DM(earth_dt[:, None] * ratio), ca.DM(gravity_dt[:, None] * ratio),
-                       ca.DM(plan.previous_scale).T)
-        trajectories.append(states[Q, :])
-        residual, group_obs = _group_residuals(rec, plan, states, dtheta, 3 * len(observations))
-        parts.append(residual)
-        observations += group_obs
-    r = ca.vertcat(*parts)
-    return ResidualGraph(ca.Function("residuals", [w], [r]),
-                         ca.Function("residuals_jacobian", [w], [r, ca.jacobian(r, w)]),
-                         ca.Function("trajectory", [w], [ca.horzcat(*trajectories)]), n_var,
-                         ObservationTable(observations), plans, reference, starts, time.perf_counter() - t0,
-                         tuple(names))
+        layout, segments = group_layout(plan, names)
+        layouts.append(layout)
+        regressors = step_regressors(per_sample, boundary, plan.first, plan.stop) if extended else None
+        data.append(group_data(rec.site, plan, segments, dcm_to_quat(starts[group]), regressors))
+        observations += _group_observations(plan, 3 * len(observations))
+    shape, _ = shape_graph(layouts, names)
+    ref = np.concatenate([reference, variable_scale(reference, names)])
+    return ResidualGraph(shape, np.concatenate(data), ref, ObservationTable(observations), plans, reference, starts,
+                         time.perf_counter() - t0, names)

@@ -4,6 +4,12 @@ The quick weighting is white accelerometer noise alone: consecutive velocity obs
 group are differenced and divided by the random walk over the samples between them (physics
 pitfall 7); gyro means are divided by their white noise and sway.  Quick, and near the answer; the
 full noise model follows in the generalised least squares (:mod:`calibrate.nlp.gls`).
+
+Ipopt minimises ``f = |W r|^2 / 2n`` over the decision vector.  Its gradient ``J^T W^T W r / n`` and
+the Gauss-Newton Hessian ``J^T W^T W J / n`` come from the graph's compiled Jacobian (the forward
+derivative carried along the chain, :mod:`nav.tangent`), evaluated once per point: Ipopt's
+gradient and Hessian at one iterate, and the generalised least squares at the solution, share it
+(:meth:`graph.ResidualGraph.linearise`).  The objective at trial points needs the residuals alone.
 """
 
 from __future__ import annotations
@@ -15,7 +21,6 @@ from typing import Callable
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sp
 
 from ...model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
 from ...model.registry import N_PARAMS, NAMES
@@ -27,8 +32,33 @@ from .graph import ResidualGraph
 RANK_TOLERANCE = 1e-7
 
 
+class RowWeights:
+    """A sparse weighting matrix ``W`` (rows of the weighted residuals x residuals), as triplets.
+
+    Parameters
+    ----------
+    rows, cols : ndarray of int
+    values : ndarray
+    shape : tuple of int
+    """
+
+    def __init__(self, rows, cols, values, shape: tuple[int, int]):
+        self.rows, self.cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+        self.values, self.shape = np.asarray(values, dtype=float), shape
+
+    def __matmul__(self, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        out = np.zeros((self.shape[0],) + x.shape[1:])
+        np.add.at(out, self.rows, self.values.reshape((-1,) + (1,) * (x.ndim - 1)) * x[self.cols])
+        return out
+
+    def to_casadi(self) -> ca.DM:
+        """The matrix as a sparse CasADi ``DM`` (the triplets are unique)."""
+        return ca.DM.triplet(self.rows.tolist(), self.cols.tolist(), self.values.tolist(), *self.shape)
+
+
 def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotation_steps: bool,
-                  motions=()) -> sp.csr_matrix:
+                  motions=()) -> RowWeights:
     """The quick weighting of stage 1: white accelerometer noise alone.
 
     Consecutive velocity observations of a group are differenced and divided by the random walk over
@@ -62,51 +92,143 @@ def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotat
         for axis in range(3):
             rows.append(out + axis), cols.append(i + axis), vals.append(1.0 / np.sqrt(variance[axis]))
         out += 3
-    return sp.csr_matrix((vals, (rows, cols)), shape=(out, graph.n_residuals))
+    return RowWeights(rows, cols, vals, (out, graph.n_residuals))
 
 
-def solve_ipopt(graph: ResidualGraph, weights: sp.csr_matrix, hessian: str, tolerance: float, max_iterations: int,
-                 progress: Callable[[str], None] | None):
+class _Oracle(ca.Callback):
+    """A NumPy function of the decision vector as a CasADi function, for Ipopt."""
+
+    def __init__(self, name: str, n: int, outputs: list[ca.Sparsity], evaluate: Callable):
+        ca.Callback.__init__(self)
+        self.n, self.outputs, self.evaluate = n, outputs, evaluate
+        self.construct(name, {})
+
+    def get_n_in(self):
+        return 1
+
+    def get_n_out(self):
+        return len(self.outputs)
+
+    def get_sparsity_in(self, i):
+        return ca.Sparsity.dense(self.n, 1)
+
+    def get_sparsity_out(self, i):
+        return self.outputs[i]
+
+    def eval(self, arg):
+        return self.evaluate(np.asarray(arg[0]).ravel())
+
+
+class WeightedLeastSquares:
+    """``f = |W r|^2 / 2n``, its gradient and Gauss-Newton Hessian, from the graph's residuals and Jacobian.
+
+    Parameters
+    ----------
+    graph : ResidualGraph
+    weights : RowWeights
+        ``W`` (n rows).
+    """
+
+    def __init__(self, graph: ResidualGraph, weights: RowWeights):
+        self.graph, self.weights = graph, weights
+        self.scale = 1.0 / weights.shape[0]  # mean square: the tolerance does not depend on the recording's length
+        self._weighted = (None, None)
+
+    def _linear(self, z: np.ndarray):
+        """``(W r, W J)`` at ``z``, one Jacobian evaluation per point."""
+        lin = self.graph.linearise(z)
+        if self._weighted[0] is not lin:
+            self._weighted = (lin, (self.weights @ lin.r, self.weights @ lin.jac))
+        return self._weighted[1]
+
+    def cost(self, z: np.ndarray) -> list:
+        """``[f]`` at ``z`` (the residuals alone, unless the point is linearised already)."""
+        rw = self.weights @ self.graph.residuals(z)
+        return [0.5 * self.scale * float(rw @ rw)]
+
+    def gradient(self, z: np.ndarray) -> list:
+        """``[f, grad f]`` at ``z``."""
+        rw, jw = self._linear(z)
+        return [0.5 * self.scale * float(rw @ rw), self.scale * (jw.T @ rw)]
+
+    def hessian(self, z: np.ndarray) -> list:
+        """``[triu(J^T W^T W J) / n]`` at ``z``."""
+        _, jw = self._linear(z)
+        return [ca.triu(ca.DM(self.scale * (jw.T @ jw)))]
+
+    def problem(self, hessian: str) -> tuple[dict, dict, list]:
+        """The NLP of ``ca.nlpsol`` and its options (gradient and, for ``"gauss-newton"``, Hessian given),
+        and the callbacks (to be kept alive while the solver is)."""
+        n = self.graph.n_variables
+        scalar, column = ca.Sparsity.dense(1, 1), ca.Sparsity.dense(n, 1)
+        cost = _Oracle("weighted_cost", n, [scalar], self.cost)
+        gradient = _Oracle("weighted_gradient", n, [scalar, column], self.gradient)
+        keep = [cost, gradient]
+        w, p = ca.MX.sym("x", n), ca.MX.sym("p", 0, 1)
+        opts = {"grad_f": ca.Function("nlp_grad_f", [w, p], gradient(w), ["x", "p"], ["f", "grad_f_x"]),
+                "calc_lam_p": False, "no_nlp_grad": True}
+        if hessian == "gauss-newton":
+            gauss_newton = _Oracle("gauss_newton_hessian", n, [ca.Sparsity.upper(n)], self.hessian)
+            keep.append(gauss_newton)
+            sigma, lam_g = ca.MX.sym("sigma"), ca.MX.sym("lam_g", 0, 1)
+            opts["hess_lag"] = ca.Function("nlp_hess_l", [w, p, sigma, lam_g], [sigma * gauss_newton(w)],
+                                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+        elif hessian == "limited-memory":
+            opts["ipopt.hessian_approximation"] = "limited-memory"
+        else:
+            raise ValueError(f"unknown hessian {hessian!r}")
+        x = ca.MX.sym("w", n)
+        return {"x": x, "f": cost(x)}, opts, keep
+
+
+def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, tolerance: float, max_iterations: int,
+                progress: Callable[[str], None] | None):
     """Stage 1: Ipopt from the reference (all variables 0) with the ``weights`` of :func:`quick_weights`.
 
-    Algorithmic derivatives, the Gauss-Newton Hessian ``J^T W J`` (``hessian="gauss-newton"``, as in
-    CasADi's system-identification example), or ``"exact"`` / ``"limited-memory"``.  Returns the
-    decision vector and Ipopt's statistics.
+    The Gauss-Newton Hessian ``J^T W J`` (``hessian="gauss-newton"``, as in CasADi's system-identification
+    example) or Ipopt's ``"limited-memory"`` approximation, with the gradient from the compiled Jacobian
+    (module docstring); ``"exact"``: CasADi's algorithmic derivatives of the whole chain on its virtual
+    machine (slow; for comparison).  Returns the decision vector and Ipopt's statistics.
     """
-    w = ca.MX.sym("w", graph.n_variables)
-    d = ca.DM(weights.tocsc())
-    r = ca.mtimes(d, graph.residuals(w))  # not the jacobian function's r: its derivative would hold J's
-    scale = 1.0 / weights.shape[0]  # mean square: the tolerance does not depend on the recording's length
-    nlp = {"x": w, "f": 0.5 * scale * ca.dot(r, r)}
+    if hessian == "exact":
+        nlp, opts, keep = _exact_problem(graph, weights), {}, []
+    else:
+        nlp, opts, keep = WeightedLeastSquares(graph, weights).problem(hessian)
     # The variables are in natural units already: Ipopt's gradient scaling at the (far-off) rough start
     # would shrink the objective by ~1e-6 and stall the line search at round-off.  The gradient of the
     # chained navigation has a round-off floor near 1e-8; a gradient of 1e-7 moves the estimate by
     # ~1e-4 of its sigma.  Also stop when the objective stalls: with noise-free data or very unequal
     # weights the gradient's round-off floor can exceed any fixed tolerance although Gauss-Newton has
     # converged.
-    opts = {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
-            "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": 1e-12, "ipopt.acceptable_iter": 2,
-            "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"}
-    if hessian == "gauss-newton":
-        jw = ca.mtimes(d, graph.jacobian(w)[1])
-        sigma = ca.MX.sym("sigma")
-        opts["hess_lag"] = ca.Function("nlp_hess_l", [w, ca.MX.sym("p", 0, 1), sigma, ca.MX.sym("lam_g", 0, 1)],
-                                       [sigma * scale * ca.triu(jw.T @ jw)], ["x", "p", "lam_f", "lam_g"],
-                                       ["triu_hess_gamma_x_x"])
-    elif hessian == "limited-memory":
-        opts["ipopt.hessian_approximation"] = "limited-memory"
-    elif hessian != "exact":
-        raise ValueError(f"unknown hessian {hessian!r}")
+    opts.update({"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
+                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": 1e-12, "ipopt.acceptable_iter": 2,
+                 "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"})
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
     with interruptions() as interrupted:
-        sol = solver(x0=np.zeros(graph.n_variables))
+        try:
+            sol = solver(x0=np.zeros(graph.n_variables))
+        except RuntimeError:
+            if interrupted:
+                raise KeyboardInterrupt from None
+            raise
     if interrupted:  # CasADi stops Ipopt on Ctrl-C and reports an exception: it is an interruption
         raise KeyboardInterrupt
+    del keep
     stats = solver.stats()
     if progress:
         progress(f"nlp: ipopt {stats['return_status']} after {stats['iter_count']} iterations, "
                  f"cost {float(sol['f']):.6g}")
     return np.asarray(sol["x"]).ravel(), stats
+
+
+def _exact_problem(graph: ResidualGraph, weights: RowWeights) -> dict:
+    """The objective as a CasADi expression of the shape's graph on the virtual machine (differentiable)."""
+    from .shape import ShapeGraph
+
+    symbolic = ShapeGraph(graph.shape.layouts, graph.names, compiled=False)
+    w = ca.MX.sym("w", graph.n_variables)
+    r = ca.mtimes(weights.to_casadi(), symbolic.residuals(w, ca.DM(graph.data), ca.DM(graph.ref)))
+    return {"x": w, "f": 0.5 / weights.shape[0] * ca.dot(r, r)}
 
 
 @contextlib.contextmanager

@@ -1,0 +1,387 @@
+"""The Kalman filter over the noise model, written once as a CasADi step and run compiled.
+
+One pass over a recording's tracks whitens residual columns: each observation's three rows become its
+innovation ``e = y - H x`` times ``L^-1`` (``S = L L^T``), and ``sum log det S`` is the likelihood's
+determinant.  The events of the model are linear maps on the state and covariance, folded into the
+transition of the step they precede or follow (:func:`fold_events`):
+
+* at a static segment's first step the segment's gyro angle and unmodelled acceleration restart
+  (``x <- D x``), the rotation's velocity error and the new unmodelled acceleration enter
+  (``P <- D P D^T + P_add``);
+* after the segment's middle step its attitude error is kept (``x <- M x``);
+
+so a step is ``x <- M Phi D x``, ``P <- M (Phi (D P D^T + P_add) Phi^T + Q) M^T``.  Steps without an
+observation are composed (:func:`compose`), and the filter visits only observed steps:
+
+:func:`filter_step_function`
+    predict with the composed step; a *free* velocity offset (a rotation's step not used) only sets
+    the offset and restarts the velocity error; else update with the velocity observation ``dv + C e_a``
+    and the gyro mean ``a / T + C_mid^T [w_ie x] phi_mid``, each absent one a no-op (``H = 0, R = I``).
+
+The step is one CasADi ``Function`` for a block of columns; it runs compiled (:mod:`core.compiled`),
+or on CasADi's virtual machine without a C compiler.  Group starts (the biases wander on, the other
+states restart) are applied between the tracks' chains.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import casadi as ca
+import numpy as np
+
+from ..core.compiled import StepChain
+from ..model.noise import SensorNoise
+from .statespace import (ACC, DV, GYRO_FLOOR, PHI, PM, ROTATION_METHOD_ERROR, VELOCITY_FLOOR, GroupTrack, Layout,
+                         Whitened, gauss_markov_integrals)
+from .observations import ObservationKind
+
+#: Columns per compiled pass of the filter (more columns: several passes; one column: its own step).
+FILTER_COLUMNS = 40
+
+
+def transition_pattern(layout: Layout) -> np.ndarray:
+    """(n, n) bool: where a folded or composed step transition can be nonzero (closed under products)."""
+    pattern = np.eye(layout.n, dtype=bool)
+    blocks = [(PHI, PHI), (DV, PHI), (PM, PHI)]
+    if layout.markov:
+        blocks += [(PHI, layout.bg), (ACC, layout.bg), (DV, layout.bg), (PM, layout.bg), (DV, layout.ba)]
+    if layout.unmodelled:
+        blocks.append((DV, layout.ua))
+    for rows, cols in blocks:
+        pattern[rows, cols] = True
+    return pattern
+
+
+def _cholesky3(s):
+    """Lower Cholesky factor ``(l11, l21, l31, l22, l32, l33)`` of a symmetric positive definite 3 x 3."""
+    l11 = ca.sqrt(s[0, 0])
+    l21, l31 = s[1, 0] / l11, s[2, 0] / l11
+    l22 = ca.sqrt(s[1, 1] - l21 * l21)
+    l32 = (s[2, 1] - l31 * l21) / l22
+    return l11, l21, l31, l22, l32, ca.sqrt(s[2, 2] - l31 * l31 - l32 * l32)
+
+
+def _lower_solve(factor, e):
+    """``L^-1 e`` for a factor of :func:`_cholesky3` and a 3 x k matrix ``e``."""
+    l11, l21, l31, l22, l32, l33 = factor
+    z1 = e[0, :] / l11
+    z2 = (e[1, :] - l21 * z1) / l22
+    return ca.vertcat(z1, z2, (e[2, :] - l31 * z1 - l32 * z2) / l33)
+
+
+def _data_sizes(n: int, ncol: int, nnz: int) -> list[int]:
+    """Packed data of a step: transition nonzeros, Q, R_v, flags (velocity, free, gyro), H_g, R_g (diagonal),
+    the velocity and gyro observations of the columns."""
+    return [nnz, n * n, 9, 3, 3 * n, 3, 3 * ncol, 3 * ncol]
+
+
+def _split(vector, sizes):
+    out, offset = [], 0
+    for size in sizes:
+        out.append(vector[offset:offset + size])
+        offset += size
+    return out
+
+
+def filter_step_function(n: int, ncol: int, pattern: np.ndarray) -> ca.Function:
+    """One observed step of the filter (module docstring) for ``ncol`` columns::
+
+        state = [x (n x ncol), P (n x n), offset (3 x ncol), log det]
+        (state, const (unused), data) -> (state next, const, whitened velocity and gyro rows (6 x ncol))
+
+    ``data`` as :func:`_data_sizes`, the transition given by the nonzeros of ``pattern`` (column-major).
+    The covariance update is ``P - K H P`` (the Joseph form's value for the optimal gain), symmetrised.
+    """
+    rows, cols = np.nonzero(pattern)
+    sparsity = ca.Sparsity.triplet(n, n, rows.tolist(), cols.tolist())
+    state, const = ca.SX.sym("state", n * ncol + n * n + 3 * ncol + 1), ca.SX.sym("const", 1)
+    data = ca.SX.sym("data", sum(_data_sizes(n, ncol, sparsity.nnz())))
+    x, p, offset, log_det = _split(state, [n * ncol, n * n, 3 * ncol, 1])
+    x, p, offset = ca.reshape(x, n, ncol), ca.reshape(p, n, n), ca.reshape(offset, 3, ncol)
+    phi, q, r_v, flags, h_g, r_g, y_v, y_g = _split(data, _data_sizes(n, ncol, sparsity.nnz()))
+    phi, q, r_v, h_g = ca.SX(sparsity, phi), ca.reshape(q, n, n), ca.reshape(r_v, 3, 3), ca.reshape(h_g, 3, n)
+    y_v, y_g = ca.reshape(y_v, 3, ncol), ca.reshape(y_g, 3, ncol)
+    has_velocity, free, has_gyro = flags[0], flags[1], flags[2]
+    velocity = ca.SX(3, n)
+    for a in range(3):
+        velocity[a, DV.start + a] = 1
+    # predict
+    x = phi @ x
+    p = phi @ p @ phi.T + q
+    # a free velocity offset: the observation only sets it, and the velocity error restarts at its remainder
+    keep = ca.SX.eye(n) - free * (velocity.T @ velocity)
+    x = keep @ x
+    p = keep @ p @ keep.T + free * (velocity.T @ r_v @ velocity)
+    offset = free * y_v + (1 - free) * offset
+    whitened = []
+    for active, h, r, innovation_of in ((has_velocity * (1 - free), velocity, r_v, y_v - offset),
+                                        (has_gyro, h_g, ca.diag(r_g), y_g)):
+        h = active * h
+        r = active * r + (1 - active) * ca.SX.eye(3)
+        ph = p @ h.T
+        s = h @ ph + r
+        factor = _cholesky3(0.5 * (s + s.T))
+        e = active * (innovation_of - h @ x)
+        whitened.append(_lower_solve(factor, e))
+        log_det = log_det + 2 * (ca.log(factor[0]) + ca.log(factor[3]) + ca.log(factor[5]))
+        gain = ph @ ca.inv(s)
+        x = x + gain @ e
+        p = p - gain @ ph.T
+        p = 0.5 * (p + p.T)
+    state_next = ca.vertcat(ca.vec(x), ca.vec(p), ca.vec(offset), log_det)
+    return ca.Function("kalman_step", [state, const, data], [state_next, const, ca.vertcat(*whitened)])
+
+
+@functools.lru_cache(maxsize=16)
+def filter_chain(n: int, ncol: int, pattern_bytes: bytes) -> StepChain:
+    """:func:`filter_step_function` compiled, as a chain over the observed steps of a track."""
+    pattern = np.frombuffer(pattern_bytes, dtype=bool).reshape(n, n)
+    return StepChain(f"kalman{n}_{ncol}", f"{n}|{ncol}|{pattern_bytes.hex()}",
+                     lambda: filter_step_function(n, ncol, pattern))
+
+
+def fold_covariance(track: GroupTrack, layout: Layout, phi: np.ndarray, q: np.ndarray, step_variance: float,
+                    unmodelled_variance: float) -> np.ndarray:
+    """A step covariance (M, n, n) with the segment starts and middle attitudes folded in (module docstring):
+    ``M (Q + Phi P_add Phi^T) M^T``, ``P_add`` the velocity error across a rotation (``step_variance``)
+    and the new segment's unmodelled acceleration; ``phi`` unfolded."""
+    axes = np.arange(3)
+    start = np.asarray(track.segment_start, bool)
+    starts = np.flatnonzero(start)
+    p_add = np.zeros((len(starts), layout.n, layout.n))
+    p_add[np.flatnonzero(starts > 0)[:, None], DV.start + axes, DV.start + axes] = step_variance  # not the first
+    if layout.unmodelled:
+        p_add[:, layout.ua.start + axes, layout.ua.start + axes] = unmodelled_variance
+    q = q.copy()
+    q[starts] += phi[starts] @ p_add @ np.swapaxes(phi[starts], 1, 2)
+    middle = sorted(track.segment_mid)
+    keep = _middle_copy(layout)
+    q[middle] = keep @ q[middle] @ keep.T
+    return q
+
+
+def fold_transition(track: GroupTrack, layout: Layout, phi: np.ndarray) -> np.ndarray:
+    """Step transitions (M, n, n) with the segment starts and middle attitudes folded in: ``M Phi D``."""
+    start = np.asarray(track.segment_start, bool)
+    restart = np.ones((len(start), layout.n))
+    restart[start, ACC] = 0.0
+    if layout.unmodelled:
+        restart[start, layout.ua] = 0.0
+    phi = phi * restart[:, None, :]
+    middle = sorted(track.segment_mid)
+    phi[middle] = _middle_copy(layout) @ phi[middle]
+    return phi
+
+
+def _middle_copy(layout: Layout) -> np.ndarray:
+    """``M``: the attitude error kept as the segment's middle one."""
+    keep = np.eye(layout.n)
+    keep[PM] = 0.0
+    keep[PM.start + np.arange(3), PHI.start + np.arange(3)] = 1.0
+    return keep
+
+
+def fold_events(system, track: GroupTrack, noise: SensorNoise, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """Every step's folded transition and covariance (M, n, n) under ``noise``."""
+    phi, q = system.transitions(track, noise, layout)
+    q = fold_covariance(track, layout, phi, q, ROTATION_METHOD_ERROR**2 + noise.unmodelled_step**2,
+                        noise.unmodelled_acceleration**2)
+    return fold_transition(track, layout, phi), q
+
+
+def folded_components(system, track: GroupTrack, noise: SensorNoise, layout: Layout):
+    """The folded transitions and the covariance as components ``(weights (J,), unit covariances [(M, n, n)])``:
+    the transitions' terms (:meth:`noise.kalman.NoiseSystem.covariance_terms`), the velocity error across a
+    rotation and, in the layout, the unmodelled acceleration (the transitions do not depend on them)."""
+    phi, terms = system.covariance_terms(track, noise, layout)
+    zero = np.zeros_like(phi)
+    units = [fold_covariance(track, layout, phi, unit, 0.0, 0.0) for _, unit in terms]
+    units.append(fold_covariance(track, layout, phi, zero, 1.0, 0.0))
+    if layout.unmodelled:
+        units.append(fold_covariance(track, layout, phi, zero, 0.0, 1.0))
+    return fold_transition(track, layout, phi), component_weights(system, noise, layout), units
+
+
+def component_weights(system, noise: SensorNoise, layout: Layout) -> np.ndarray:
+    """The weights (variances) of :func:`folded_components`' components under ``noise``."""
+    weights = system.term_variances(noise, layout) + [ROTATION_METHOD_ERROR**2 + noise.unmodelled_step**2]
+    return np.array(weights + ([noise.unmodelled_acceleration**2] if layout.unmodelled else []))
+
+
+def compose(phi: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One transition and covariance for consecutive steps (K, n, n), composed pairwise (``q`` may hold
+    several covariances per step, (K, J, n, n))."""
+    while len(phi) > 1:
+        odd = len(phi) % 2
+        first_phi, first_q = phi[0:len(phi) - odd:2], q[0:len(q) - odd:2]
+        second_phi, second_q = phi[1::2], q[1::2]
+        new_phi = second_phi @ first_phi
+        turn = second_phi[:, None] if q.ndim == 4 else second_phi  # q per variance component: (K, J, n, n)
+        new_q = turn @ first_q @ np.swapaxes(turn, -1, -2) + second_q
+        if odd:
+            new_phi, new_q = np.concatenate([new_phi, phi[-1:]]), np.concatenate([new_q, q[-1:]])
+        phi, q = new_phi, new_q
+    return phi[0], q[0]
+
+
+def _observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout, components: bool = False):
+    """The track's observed steps (and its last), each with the steps since the previous one composed:
+    ``(steps, phi (K, n, n), q (K, n, n))``; with ``components`` ``q`` per component of
+    :func:`folded_components`, ``(K, J, n, n)``, and their weights ``(J,)``."""
+    if components:
+        phi, weights, units = folded_components(system, track, noise, layout)
+    else:
+        phi, q = fold_events(system, track, noise, layout)
+        weights, units = None, [q]
+    m = len(phi)
+    observed = sorted({obs.step for obs in track.observations})
+    ends = observed + ([m - 1] if m and (not observed or observed[-1] != m - 1) else [])
+    phis, qs, start = [], [], 0
+    for end in ends:
+        interval = slice(start, end + 1)
+        q = units[0][interval] if weights is None else np.stack([unit[interval] for unit in units], axis=1)
+        composed = compose(phi[interval], q)
+        phis.append(composed[0])
+        qs.append(composed[1])
+        start = end + 1
+    return ends, np.array(phis), np.array(qs), weights
+
+
+def _composed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout, repeated: bool):
+    """:func:`_observed_steps` under ``noise``; when the system is whitened again with the same layout and
+    correlation times (a likelihood search), from its variance components, composed once and kept."""
+    if not repeated:
+        return _observed_steps(system, track, noise, layout)[:3]
+    key = (layout, noise.gyro_bias_tau, noise.accel_bias_tau, id(track))
+    cache = system.__dict__.setdefault("_components", {})
+    if key not in cache:
+        cache[key] = _observed_steps(system, track, noise, layout, components=True)[:3]
+    ends, phi, q = cache[key]
+    weights = component_weights(system, noise, layout)
+    return ends, phi, np.einsum("j,kjab->kab", weights, q)
+
+
+def _observation_data(system, track: GroupTrack, noise: SensorNoise, n: int, ends: list[int]):
+    """Per observed step: ``R_v`` (K, 3, 3), flags (K, 3), ``H_g`` (K, 3, n), ``R_g`` (K, 3); and the
+    ``(position, row)`` of the velocity and of the gyro observations."""
+    k = len(ends)
+    position = {step: i for i, step in enumerate(ends)}
+    r_v, flags = np.tile(np.eye(3), (k, 1, 1)), np.zeros((k, 3))
+    h_g, r_g = np.zeros((k, 3, n)), np.ones((k, 3))
+    velocity = [obs for obs in track.observations if obs.kind == ObservationKind.VELOCITY]
+    gyro = [obs for obs in track.observations if obs.kind == ObservationKind.GYRO_MEAN]
+    if velocity:
+        steps = np.array([obs.step for obs in velocity])
+        at = np.array([position[step] for step in steps])
+        c = track.attitude[steps]
+        r_v[at] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
+        # a free velocity offset from a step on: set by the next velocity observation
+        free_so_far = np.cumsum(np.asarray(track.free_velocity, dtype=int))
+        since = free_so_far[steps] - np.concatenate([[0], free_so_far[steps[:-1]]])
+        flags[at, 0], flags[at, 1] = 1.0, (since > 0)
+    for obs in gyro:
+        i = position[obs.step]
+        duration = track.segment_duration[obs.segment]
+        r_g[i] = (2.0 * noise.gyro_quantization**2 / duration**2 + track.segment_sway.get(obs.segment, 0.0)
+                  + noise.unmodelled_rate**2 + GYRO_FLOOR)
+        h_g[i][:, ACC] = np.eye(3) / duration
+        h_g[i][:, PM] = track.attitude[track.segment_mid_of[obs.segment]].T @ system.earth_cross
+        flags[i, 2] = 1.0
+    rows = [[(position[obs.step], obs.row) for obs in kind] for kind in (velocity, gyro)]
+    return r_v, flags, h_g, r_g, rows[0], rows[1]
+
+
+def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, pattern: np.ndarray, ncol: int,
+                repeated: bool):
+    """The packed data rows of a track (observations zero), the rows of its observations, a pad row, and
+    where the observations start in a row."""
+    n = layout.n
+    ends, phi, q = _composed_steps(system, track, noise, layout, repeated)
+    if np.abs(phi[:, ~pattern]).max(initial=0.0) > 0.0:
+        raise RuntimeError("a step transition outside its sparsity pattern")
+    col_of, row_of = np.nonzero(pattern.T)  # the nonzeros in column-major order
+    r_v, flags, h_g, r_g, velocity, gyro = _observation_data(system, track, noise, n, ends)
+    k = len(ends)
+    sizes = _data_sizes(n, ncol, len(row_of))
+    data = np.zeros((k, sum(sizes)))
+    parts = [phi[:, row_of, col_of], np.swapaxes(q, 1, 2).reshape(k, -1), np.swapaxes(r_v, 1, 2).reshape(k, 9), flags,
+             np.swapaxes(h_g, 1, 2).reshape(k, -1), r_g]
+    offset = 0
+    for part, size in zip(parts, sizes):
+        data[:, offset:offset + size] = part
+        offset += size
+    pad = np.zeros(sum(sizes))  # a step that changes nothing: Phi = I, Q = 0, no observation
+    pad[:len(row_of)] = (row_of == col_of).astype(float)
+    pad[sum(sizes[:2]):sum(sizes[:3])] = np.eye(3).ravel()
+    pad[sum(sizes[:5]):sum(sizes[:6])] = 1.0
+    return data, velocity, gyro, pad, offset
+
+
+def _start_group(x: np.ndarray, p: np.ndarray, track: GroupTrack, previous_end: float | None, noise: SensorNoise,
+                 layout: Layout) -> None:
+    """A new group (in place): the biases wander on since the last one; attitude free (estimated), velocity
+    zero up to the accelerometers' remainder, the other states restart."""
+    if layout.markov and previous_end is not None:
+        for sl, sigma, tau in ((layout.bg, noise.gyro_bias_instability, noise.gyro_bias_tau),
+                               (layout.ba, noise.accel_bias_instability, noise.accel_bias_tau)):
+            beta = gauss_markov_integrals(max(track.start_time - previous_end, 0.0), tau)[0]
+            x[sl] *= beta
+            p[sl, :] *= beta
+            p[:, sl] *= beta
+            p[sl, sl] += np.eye(3) * sigma**2 * (1.0 - beta**2)
+    for sl in (PHI, DV, ACC, PM) + ((layout.ua,) if layout.unmodelled else ()):
+        x[sl] = 0.0
+        p[sl, :] = 0.0
+        p[:, sl] = 0.0
+    c0 = track.attitude[0]
+    p[DV, DV] = (c0 * noise.accel_quantization**2) @ c0.T
+
+
+def whiten(system, columns: np.ndarray, noise: SensorNoise) -> Whitened:
+    """``Sigma^-1/2`` applied to residual columns (rows in residual order) under ``noise``: one filter pass
+    over ``system``'s tracks (a :class:`noise.kalman.NoiseSystem`), in compiled passes of columns."""
+    noise = noise.complete()
+    columns = np.asarray(columns, dtype=float)
+    columns = columns[:, None] if columns.ndim == 1 else columns
+    layout = Layout.of(noise)
+    n, total = layout.n, columns.shape[1]
+    ncol = 1 if total == 1 else FILTER_COLUMNS
+    pattern = transition_pattern(layout)
+    chain = filter_chain(n, ncol, pattern.tobytes())
+    key = (layout, noise.gyro_bias_tau, noise.accel_bias_tau)
+    seen = system.__dict__.setdefault("_whitened", set())
+    tracks = [_track_data(system, track, noise, layout, pattern, ncol, key in seen) for track in system.tracks]
+    seen.add(key)
+    out = np.zeros_like(columns)
+    log_det = 0.0
+    for c0 in range(0, total, ncol):
+        block = columns[:, c0:c0 + ncol]
+        width = block.shape[1]
+        x, p = np.zeros((n, ncol)), np.zeros((n, n))
+        if layout.markov:
+            p[layout.bg, layout.bg] = np.eye(3) * noise.gyro_bias_instability**2
+            p[layout.ba, layout.ba] = np.eye(3) * noise.accel_bias_instability**2
+        previous_end, pass_log_det = None, 0.0
+        for track, (data, velocity, gyro, pad, obs_at) in zip(system.tracks, tracks):
+            _start_group(x, p, track, previous_end, noise, layout)
+            observed = np.zeros((len(data), 2, ncol, 3))  # per row: velocity then gyro, each 3 x ncol column-major
+            for i, row in velocity:
+                observed[i, 0, :width] = block[row:row + 3].T
+            for i, row in gyro:
+                observed[i, 1, :width] = block[row:row + 3].T
+            data[:, obs_at:] = observed.reshape(len(data), -1)
+            state = np.concatenate([x.ravel(order="F"), p.ravel(order="F"), np.zeros(3 * ncol), [0.0]])
+            result, final = chain(state, np.zeros(1), data, pad)
+            result = result.reshape(len(data), ncol, 6)
+            for i, row in velocity:
+                out[row:row + 3, c0:c0 + width] = result[i, :width, :3].T
+            for i, row in gyro:
+                out[row:row + 3, c0:c0 + width] = result[i, :width, 3:].T
+            x = final[:n * ncol].reshape(n, ncol, order="F")
+            p = final[n * ncol:n * ncol + n * n].reshape(n, n, order="F")
+            pass_log_det += final[-1]
+            previous_end = track.end_time
+        if c0 == 0:
+            log_det = pass_log_det
+    return Whitened(out, float(log_det), system.rows)

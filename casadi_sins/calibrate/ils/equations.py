@@ -10,6 +10,7 @@ the 21 error terms (:mod:`nav.errormodel`) give the design matrix.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -39,6 +40,14 @@ def coefficient_operator(tau: np.ndarray, degree: int) -> tuple[np.ndarray, np.n
     sigma_p = head + tau * tail
     cov = pinv @ sigma_p.T
     return pinv, cov
+
+
+@functools.lru_cache(maxsize=256)
+def _sample_operator(n: int, dt: float, degree: int) -> np.ndarray:
+    """:func:`coefficient_operator` of ``n`` samples ``dt`` apart (the same in every iteration; read-only)."""
+    rows, _ = coefficient_operator((np.arange(n) + 1) * dt, degree)
+    rows.flags.writeable = False
+    return rows
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,11 +86,9 @@ def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = 
             sl = rec.segment_samples(seg)
             local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
             n = local.stop - local.start
-            tau = (np.arange(n) + 1) * rec.dt
             before = local.start - 1
             for axis in axes:
-                degree = 1 if axis == 2 else 2
-                ops, _ = coefficient_operator(tau, degree)
+                ops = _sample_operator(n, rec.dt, 1 if axis == 2 else 2)
                 if axis == 1 and not north_quadratic:
                     ops = ops[:1]
                 velocity = nav.velocity[local, axis] - (nav.velocity[before, axis] if before >= 0 else 0.0)

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy.linalg import expm
 
 from ..core.earth import EARTH_RATE, earth_radii, earth_rate_enu
+from ..core.linalg import expm
 from ..core.orientation import orientation_to_dcm
 from ..core.rotations import skew
 from ..core.units import DEG_PER_H, UG

@@ -22,10 +22,10 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.linalg import expm
 
 from ...core.earth import Site
 from ...core.errors import InputError
+from ...core.linalg import expm
 from . import model as M
 from .schemes import Piece, Scheme, check_size, scheme_pieces
 

@@ -33,7 +33,7 @@ import numpy as np
 from ..core.compiled import StepChain
 from ..model.noise import SensorNoise
 from .statespace import (ACC, DV, GYRO_FLOOR, PHI, PM, ROTATION_METHOD_ERROR, VELOCITY_FLOOR, GroupTrack, Layout,
-                         Whitened, gauss_markov_integrals)
+                         Whitened, axis_shape, gauss_markov_integrals)
 from .observations import ObservationKind
 
 #: Columns per compiled pass of the filter (more columns: several passes; one column: its own step).
@@ -71,9 +71,10 @@ def _lower_solve(factor, e):
 
 
 def _data_sizes(n: int, ncol: int, nnz: int) -> list[int]:
-    """Packed data of a step: transition nonzeros, Q, R_v, flags (velocity, free, gyro), H_g, R_g (diagonal),
-    the velocity and gyro observations of the columns."""
-    return [nnz, n * n, 9, 3, 3 * n, 3, 3 * ncol, 3 * ncol]
+    """Packed data of a row: transition nonzeros, Q (lower triangle, column-major), R (3 x 3), flags (velocity,
+    free, gyro), the gyro mean's H on the segment's gyro angle and middle attitude (3 x 6), the observation
+    of the columns (3 x ncol)."""
+    return [nnz, n * (n + 1) // 2, 9, 3, 18, 3 * ncol]
 
 
 def _split(vector, sizes):
@@ -84,14 +85,21 @@ def _split(vector, sizes):
     return out
 
 
+def _symmetric(matrix):
+    """The symmetric matrix of ``matrix``'s lower triangle (the upper one is never computed)."""
+    lower = ca.tril(matrix)
+    return lower + ca.tril(lower, False).T
+
+
 def filter_step_function(n: int, ncol: int, pattern: np.ndarray) -> ca.Function:
-    """One observed step of the filter (module docstring) for ``ncol`` columns::
+    """One row of the filter (module docstring) for ``ncol`` columns: predict, then one observation::
 
         state = [x (n x ncol), P (n x n), offset (3 x ncol), log det]
-        (state, const (unused), data) -> (state next, const, whitened velocity and gyro rows (6 x ncol))
+        (state, const (unused), data) -> (state next, const, whitened rows (3 x ncol))
 
     ``data`` as :func:`_data_sizes`, the transition given by the nonzeros of ``pattern`` (column-major).
-    The covariance update is ``P - K H P`` (the Joseph form's value for the optimal gain), symmetrised.
+    The covariance update is ``P - K H P`` (the Joseph form's value for the optimal gain), its lower
+    triangle mirrored.
     """
     rows, cols = np.nonzero(pattern)
     sparsity = ca.Sparsity.triplet(n, n, rows.tolist(), cols.tolist())
@@ -99,38 +107,34 @@ def filter_step_function(n: int, ncol: int, pattern: np.ndarray) -> ca.Function:
     data = ca.SX.sym("data", sum(_data_sizes(n, ncol, sparsity.nnz())))
     x, p, offset, log_det = _split(state, [n * ncol, n * n, 3 * ncol, 1])
     x, p, offset = ca.reshape(x, n, ncol), ca.reshape(p, n, n), ca.reshape(offset, 3, ncol)
-    phi, q, r_v, flags, h_g, r_g, y_v, y_g = _split(data, _data_sizes(n, ncol, sparsity.nnz()))
-    phi, q, r_v, h_g = ca.SX(sparsity, phi), ca.reshape(q, n, n), ca.reshape(r_v, 3, 3), ca.reshape(h_g, 3, n)
-    y_v, y_g = ca.reshape(y_v, 3, ncol), ca.reshape(y_g, 3, ncol)
-    has_velocity, free, has_gyro = flags[0], flags[1], flags[2]
-    velocity = ca.SX(3, n)
+    phi, q, r, flags, h_gyro, y = _split(data, _data_sizes(n, ncol, sparsity.nnz()))
+    phi, q = ca.SX(sparsity, phi), ca.tril2symm(ca.SX(ca.Sparsity.lower(n), q))
+    r, y = ca.reshape(r, 3, 3), ca.reshape(y, 3, ncol)
+    is_velocity, free, is_gyro = flags[0], flags[1], flags[2]
+    velocity, gyro = ca.SX(3, n), ca.SX(3, n)
+    h_gyro = ca.reshape(h_gyro, 3, 6)
     for a in range(3):
         velocity[a, DV.start + a] = 1
-    # predict
+        gyro[:, ACC.start + a], gyro[:, PM.start + a] = h_gyro[:, a], h_gyro[:, 3 + a]
     x = phi @ x
-    p = phi @ p @ phi.T + q
+    p = _symmetric(phi @ p @ phi.T + q)
     # a free velocity offset: the observation only sets it, and the velocity error restarts at its remainder
     keep = ca.SX.eye(n) - free * (velocity.T @ velocity)
     x = keep @ x
-    p = keep @ p @ keep.T + free * (velocity.T @ r_v @ velocity)
-    offset = free * y_v + (1 - free) * offset
-    whitened = []
-    for active, h, r, innovation_of in ((has_velocity * (1 - free), velocity, r_v, y_v - offset),
-                                        (has_gyro, h_g, ca.diag(r_g), y_g)):
-        h = active * h
-        r = active * r + (1 - active) * ca.SX.eye(3)
-        ph = p @ h.T
-        s = h @ ph + r
-        factor = _cholesky3(0.5 * (s + s.T))
-        e = active * (innovation_of - h @ x)
-        whitened.append(_lower_solve(factor, e))
-        log_det = log_det + 2 * (ca.log(factor[0]) + ca.log(factor[3]) + ca.log(factor[5]))
-        gain = ph @ ca.inv(s)
-        x = x + gain @ e
-        p = p - gain @ ph.T
-        p = 0.5 * (p + p.T)
+    p = keep @ p @ keep.T + free * (velocity.T @ r @ velocity)
+    offset = free * y + (1 - free) * offset
+    active = is_velocity * (1 - free) + is_gyro
+    h = is_velocity * (1 - free) * velocity + is_gyro * gyro
+    ph = p @ h.T
+    s = h @ ph + active * r + (1 - active) * ca.SX.eye(3)
+    factor = _cholesky3(0.5 * (s + s.T))
+    e = active * (y - is_velocity * offset - h @ x)
+    log_det = log_det + 2 * (ca.log(factor[0]) + ca.log(factor[3]) + ca.log(factor[5]))
+    gain = ph @ ca.inv(s)
+    x = x + gain @ e
+    p = _symmetric(p - gain @ ph.T)
     state_next = ca.vertcat(ca.vec(x), ca.vec(p), ca.vec(offset), log_det)
-    return ca.Function("kalman_step", [state, const, data], [state_next, const, ca.vertcat(*whitened)])
+    return ca.Function("kalman_step", [state, const, data], [state_next, const, _lower_solve(factor, e)])
 
 
 @functools.lru_cache(maxsize=16)
@@ -236,24 +240,30 @@ def _observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layou
         weights, units = None, [q]
     m = len(phi)
     observed = sorted({obs.step for obs in track.observations})
-    ends = observed + ([m - 1] if m and (not observed or observed[-1] != m - 1) else [])
-    phis, qs, start = [], [], 0
-    for end in ends:
-        interval = slice(start, end + 1)
+    ends = np.array(observed + ([m - 1] if m and (not observed or observed[-1] != m - 1) else []), dtype=int)
+    starts = np.concatenate([[0], ends[:-1] + 1]).astype(int)
+    phis = phi[ends]  # an observed step right after the previous one: nothing to compose
+    qs = units[0][ends] if weights is None else np.stack([unit[ends] for unit in units], axis=1)
+    for i in np.flatnonzero(ends > starts):
+        interval = slice(starts[i], ends[i] + 1)
         q = units[0][interval] if weights is None else np.stack([unit[interval] for unit in units], axis=1)
-        composed = compose(phi[interval], q)
-        phis.append(composed[0])
-        qs.append(composed[1])
-        start = end + 1
-    return ends, np.array(phis), np.array(qs), weights
+        phis[i], qs[i] = compose(phi[interval], q)
+    return list(ends), phis, qs, weights
+
+
+def _search_key(noise: SensorNoise, layout: Layout) -> tuple:
+    """What a likelihood search keeps while it varies the noise levels: the layout, the correlation times and
+    the white noise's proportions between axes (the components depend on these only)."""
+    shapes = np.concatenate([axis_shape(noise.gyro_arw), axis_shape(noise.accel_vrw)])
+    return layout, noise.gyro_bias_tau, noise.accel_bias_tau, tuple(np.round(shapes, 12))
 
 
 def _composed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout, repeated: bool):
-    """:func:`_observed_steps` under ``noise``; when the system is whitened again with the same layout and
-    correlation times (a likelihood search), from its variance components, composed once and kept."""
+    """:func:`_observed_steps` under ``noise``; when the system is whitened again and again with the same
+    layout and correlation times (a likelihood search), from its variance components, composed once and kept."""
     if not repeated:
         return _observed_steps(system, track, noise, layout)[:3]
-    key = (layout, noise.gyro_bias_tau, noise.accel_bias_tau, id(track))
+    key = _search_key(noise, layout) + (id(track),)
     cache = system.__dict__.setdefault("_components", {})
     if key not in cache:
         cache[key] = _observed_steps(system, track, noise, layout, components=True)[:3]
@@ -262,60 +272,66 @@ def _composed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layou
     return ends, phi, np.einsum("j,kjab->kab", weights, q)
 
 
-def _observation_data(system, track: GroupTrack, noise: SensorNoise, n: int, ends: list[int]):
-    """Per observed step: ``R_v`` (K, 3, 3), flags (K, 3), ``H_g`` (K, 3, n), ``R_g`` (K, 3); and the
-    ``(position, row)`` of the velocity and of the gyro observations."""
-    k = len(ends)
-    position = {step: i for i, step in enumerate(ends)}
-    r_v, flags = np.tile(np.eye(3), (k, 1, 1)), np.zeros((k, 3))
-    h_g, r_g = np.zeros((k, 3, n)), np.ones((k, 3))
-    velocity = [obs for obs in track.observations if obs.kind == ObservationKind.VELOCITY]
-    gyro = [obs for obs in track.observations if obs.kind == ObservationKind.GYRO_MEAN]
-    if velocity:
-        steps = np.array([obs.step for obs in velocity])
-        at = np.array([position[step] for step in steps])
-        c = track.attitude[steps]
-        r_v[at] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
+def _rows(system, track: GroupTrack, noise: SensorNoise, ends: list[int]):
+    """One row per observation (in step order, a step's velocity before its gyro mean) and one for the track's
+    end when nothing is observed there: per row the index into ``ends`` of its composed step (-1: the
+    step's second observation, nothing to predict), ``R``, flags and the gyro mean's ``H``; and each
+    observation's residual rows (K, 3)."""
+    observations = sorted(track.observations, key=lambda o: (o.step, int(o.kind)))
+    steps = [obs.step for obs in observations] + ([ends[-1]] if not observations or ends[-1] != observations[-1].step
+                                                   else [])
+    k = len(steps)
+    first = np.array([i == 0 or steps[i] != steps[i - 1] for i in range(k)])
+    composed = np.full(k, -1)
+    composed[first] = np.arange(first.sum())
+    r, flags, h_gyro = np.tile(np.eye(3), (k, 1, 1)), np.zeros((k, 3)), np.zeros((k, 3, 6))
+    velocity = np.array([i for i, obs in enumerate(observations) if obs.kind == ObservationKind.VELOCITY], dtype=int)
+    if len(velocity):
+        at = np.array([observations[i].step for i in velocity])
+        c = track.attitude[at]
+        r[velocity] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
         # a free velocity offset from a step on: set by the next velocity observation
         free_so_far = np.cumsum(np.asarray(track.free_velocity, dtype=int))
-        since = free_so_far[steps] - np.concatenate([[0], free_so_far[steps[:-1]]])
-        flags[at, 0], flags[at, 1] = 1.0, (since > 0)
-    for obs in gyro:
-        i = position[obs.step]
-        duration = track.segment_duration[obs.segment]
-        r_g[i] = (2.0 * noise.gyro_quantization**2 / duration**2 + track.segment_sway.get(obs.segment, 0.0)
-                  + noise.unmodelled_rate**2 + GYRO_FLOOR)
-        h_g[i][:, ACC] = np.eye(3) / duration
-        h_g[i][:, PM] = track.attitude[track.segment_mid_of[obs.segment]].T @ system.earth_cross
-        flags[i, 2] = 1.0
-    rows = [[(position[obs.step], obs.row) for obs in kind] for kind in (velocity, gyro)]
-    return r_v, flags, h_g, r_g, rows[0], rows[1]
+        since = free_so_far[at] - np.concatenate([[0], free_so_far[at[:-1]]])
+        flags[velocity, 0], flags[velocity, 1] = 1.0, (since > 0)
+    for i, obs in enumerate(observations):
+        if obs.kind == ObservationKind.GYRO_MEAN:
+            duration = track.segment_duration[obs.segment]
+            r[i] = np.diag(2.0 * noise.gyro_quantization**2 / duration**2 + track.segment_sway.get(obs.segment, 0.0)
+                           + noise.unmodelled_rate**2 + GYRO_FLOOR)
+            h_gyro[i, :, :3] = np.eye(3) / duration
+            h_gyro[i, :, 3:] = track.attitude[track.segment_mid_of[obs.segment]].T @ system.earth_cross
+            flags[i, 2] = 1.0
+    residual_rows = np.array([obs.row + np.arange(3) for obs in observations], dtype=int).reshape(-1, 3)
+    return composed, r, flags, h_gyro, residual_rows
 
 
 def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, pattern: np.ndarray, ncol: int,
                 repeated: bool):
-    """The packed data rows of a track (observations zero), the rows of its observations, a pad row, and
-    where the observations start in a row."""
+    """The packed data rows of a track (observations zero), the residual rows of its observations (in row
+    order), a pad row, and where the observations start in a row."""
     n = layout.n
     ends, phi, q = _composed_steps(system, track, noise, layout, repeated)
     if np.abs(phi[:, ~pattern]).max(initial=0.0) > 0.0:
         raise RuntimeError("a step transition outside its sparsity pattern")
     col_of, row_of = np.nonzero(pattern.T)  # the nonzeros in column-major order
-    r_v, flags, h_g, r_g, velocity, gyro = _observation_data(system, track, noise, n, ends)
-    k = len(ends)
+    lower_col, lower_row = np.nonzero(np.tril(np.ones((n, n), bool)).T)
+    composed, r, flags, h_gyro, residual_rows = _rows(system, track, noise, ends)
+    k = len(composed)
     sizes = _data_sizes(n, ncol, len(row_of))
     data = np.zeros((k, sum(sizes)))
-    parts = [phi[:, row_of, col_of], np.swapaxes(q, 1, 2).reshape(k, -1), np.swapaxes(r_v, 1, 2).reshape(k, 9), flags,
-             np.swapaxes(h_g, 1, 2).reshape(k, -1), r_g]
+    identity = (row_of == col_of).astype(float)
+    parts = [np.where(composed[:, None] >= 0, phi[composed][:, row_of, col_of], identity),
+             np.where(composed[:, None] >= 0, q[composed][:, lower_row, lower_col], 0.0),
+             np.swapaxes(r, 1, 2).reshape(k, 9), flags, np.swapaxes(h_gyro, 1, 2).reshape(k, 18)]
     offset = 0
     for part, size in zip(parts, sizes):
         data[:, offset:offset + size] = part
         offset += size
-    pad = np.zeros(sum(sizes))  # a step that changes nothing: Phi = I, Q = 0, no observation
-    pad[:len(row_of)] = (row_of == col_of).astype(float)
+    pad = np.zeros(sum(sizes))  # a row that changes nothing: Phi = I, Q = 0, no observation
+    pad[:len(row_of)] = identity
     pad[sum(sizes[:2]):sum(sizes[:3])] = np.eye(3).ravel()
-    pad[sum(sizes[:5]):sum(sizes[:6])] = 1.0
-    return data, velocity, gyro, pad, offset
+    return data, residual_rows, pad, offset
 
 
 def _start_group(x: np.ndarray, p: np.ndarray, track: GroupTrack, previous_end: float | None, noise: SensorNoise,
@@ -349,10 +365,10 @@ def whiten(system, columns: np.ndarray, noise: SensorNoise) -> Whitened:
     ncol = 1 if total == 1 else FILTER_COLUMNS
     pattern = transition_pattern(layout)
     chain = filter_chain(n, ncol, pattern.tobytes())
-    key = (layout, noise.gyro_bias_tau, noise.accel_bias_tau)
-    seen = system.__dict__.setdefault("_whitened", set())
-    tracks = [_track_data(system, track, noise, layout, pattern, ncol, key in seen) for track in system.tracks]
-    seen.add(key)
+    key = _search_key(noise, layout)
+    seen = system.__dict__.setdefault("_whitened", {})
+    seen[key] = seen.get(key, 0) + 1  # from the third whitening on (a likelihood search), from components
+    tracks = [_track_data(system, track, noise, layout, pattern, ncol, seen[key] > 2) for track in system.tracks]
     out = np.zeros_like(columns)
     log_det = 0.0
     for c0 in range(0, total, ncol):
@@ -363,21 +379,14 @@ def whiten(system, columns: np.ndarray, noise: SensorNoise) -> Whitened:
             p[layout.bg, layout.bg] = np.eye(3) * noise.gyro_bias_instability**2
             p[layout.ba, layout.ba] = np.eye(3) * noise.accel_bias_instability**2
         previous_end, pass_log_det = None, 0.0
-        for track, (data, velocity, gyro, pad, obs_at) in zip(system.tracks, tracks):
+        for track, (data, rows, pad, obs_at) in zip(system.tracks, tracks):
             _start_group(x, p, track, previous_end, noise, layout)
-            observed = np.zeros((len(data), 2, ncol, 3))  # per row: velocity then gyro, each 3 x ncol column-major
-            for i, row in velocity:
-                observed[i, 0, :width] = block[row:row + 3].T
-            for i, row in gyro:
-                observed[i, 1, :width] = block[row:row + 3].T
+            observed = np.zeros((len(data), ncol, 3))  # per row: the observation, 3 x ncol column-major
+            observed[:len(rows), :width] = np.swapaxes(block[rows], 1, 2)
             data[:, obs_at:] = observed.reshape(len(data), -1)
             state = np.concatenate([x.ravel(order="F"), p.ravel(order="F"), np.zeros(3 * ncol), [0.0]])
             result, final = chain(state, np.zeros(1), data, pad)
-            result = result.reshape(len(data), ncol, 6)
-            for i, row in velocity:
-                out[row:row + 3, c0:c0 + width] = result[i, :width, :3].T
-            for i, row in gyro:
-                out[row:row + 3, c0:c0 + width] = result[i, :width, 3:].T
+            out[rows, c0:c0 + width] = np.swapaxes(result.reshape(len(data), ncol, 3)[:len(rows), :width], 1, 2)
             x = final[:n * ncol].reshape(n, ncol, order="F")
             p = final[n * ncol:n * ncol + n * n].reshape(n, n, order="F")
             pass_log_det += final[-1]

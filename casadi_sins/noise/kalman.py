@@ -36,7 +36,7 @@ from ..core.rotations import skew
 from ..model.noise import SensorNoise
 from .filter import whiten
 from .statespace import (ACC, BASE_STATES, DV, GYRO_FLOOR, PHI, PM, ROTATION_METHOD_ERROR, VELOCITY_FLOOR, GroupTrack,
-                         Layout, Whitened, gauss_markov_integrals)
+                         Layout, Whitened, axis_shape, gauss_markov_integrals)
 
 __all__ = ["NoiseSystem", "GroupTrack", "Layout", "Whitened", "gauss_markov_integrals", "PHI", "DV", "ACC", "PM",
            "BASE_STATES", "VELOCITY_FLOOR", "GYRO_FLOOR", "ROTATION_METHOD_ERROR"]
@@ -66,9 +66,9 @@ class NoiseSystem:
     # ------------------------------------------------------------------ discretisation
     def transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """``Phi`` (M, n, n) and ``Q`` (M, n, n) of every step (exact for a constant attitude in the step)."""
-        phi, terms = self.covariance_terms(track, noise, layout)
-        q = np.zeros_like(phi)
-        for variance, unit in terms:
+        phi, markov = self._transitions(track, noise, layout)
+        q = self._white(track, layout, noise.gyro_arw**2, noise.accel_vrw**2)
+        for variance, unit in zip(self._markov_variances(noise, layout), markov):
             if variance:
                 q += variance * unit
         return phi, q
@@ -76,50 +76,57 @@ class NoiseSystem:
     def covariance_terms(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """``Phi`` (M, n, n) of every step and its covariance as terms ``(variance, unit covariance (M, n, n))``.
 
-        The terms: the white gyro noise of each axis (ARW^2), the white accelerometer noise of each axis
-        (VRW^2), and with Gauss-Markov biases the gyro's and the accelerometer's instability^2; the
-        transitions depend on the correlation times only, so a likelihood search over the variances reuses
-        them (:mod:`noise.filter`).
+        The terms: the white gyro noise (its largest axis' ARW^2, the axes in the model's proportions,
+        :func:`axis_shape`), the white accelerometer noise (VRW^2, likewise), and with Gauss-Markov biases
+        the gyro's and the accelerometer's instability^2; the transitions depend on the correlation times
+        only, so a likelihood search over the levels reuses them (:mod:`noise.filter`).
         """
-        n = layout.n
-        h = track.step_dt
-        c = track.attitude
-        m = len(h)
-        eye3 = np.eye(3)
-        phi = np.tile(np.eye(n), (m, 1, 1))
+        phi, markov = self._transitions(track, noise, layout)
+        zero = np.zeros(3)
+        units = [self._white(track, layout, axis_shape(noise.gyro_arw) ** 2, zero),
+                 self._white(track, layout, zero, axis_shape(noise.accel_vrw) ** 2)]
+        return phi, list(zip(self.term_variances(noise, layout), units + markov))
+
+    def _transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
+        """``Phi`` of every step, and the biases' unit covariances (gyro, accelerometer) when in the layout."""
+        n, h = layout.n, track.step_dt
+        phi = np.tile(np.eye(n), (len(h), 1, 1))
         phi[:, PHI, PHI] -= self.earth_cross[None] * h[:, None, None]
         phi[:, DV, PHI] = self.f_cross[None] * h[:, None, None]
+        if layout.unmodelled:  # unmodelled acceleration: constant within a static segment
+            phi[:, DV, layout.ua] = np.eye(3) * (h * track.static)[:, None, None]
+        return phi, (self._gauss_markov(phi, track, noise, layout) if layout.markov else [])
+
+    def _white(self, track: GroupTrack, layout: Layout, gyro_variance, accel_variance) -> np.ndarray:
+        """The white noise's covariance over each step (M, n, n) for per-axis variances (ARW^2, VRW^2)."""
+        h, c, n = track.step_dt, track.attitude, layout.n
+        m = len(h)
         # white gyro noise: Phi(u) G = V0 + V1 u (u = time to the end of the step); white accelerometer noise: W0
         v0 = np.zeros((m, n, 3))
         v0[:, PHI] = -c
-        v0[:, ACC] = eye3
+        v0[:, ACC] = np.eye(3)
         v1 = np.zeros((m, n, 3))
         v1[:, DV] = -self.f_cross @ c
+        h1, h2, h3 = (h[:, None, None] ** k / k for k in (1, 2, 3))
+        a = (v0 * gyro_variance) @ np.swapaxes(v0, 1, 2)
+        b = (v0 * gyro_variance) @ np.swapaxes(v1, 1, 2)
+        d = (v1 * gyro_variance) @ np.swapaxes(v1, 1, 2)
+        q = a * h1 + (b + np.swapaxes(b, 1, 2)) * h2 + d * h3
         w0 = np.zeros((m, n, 3))
         w0[:, DV] = c
-        h1, h2, h3 = (h[:, None, None] ** k / k for k in (1, 2, 3))
-        units = []
-        for axis in range(3):
-            a, b = v0[:, :, axis, None], v1[:, :, axis, None]
-            cross = a @ np.swapaxes(b, 1, 2)
-            units.append(a @ np.swapaxes(a, 1, 2) * h1 + (cross + np.swapaxes(cross, 1, 2)) * h2
-                         + b @ np.swapaxes(b, 1, 2) * h3)
-        for axis in range(3):
-            a = w0[:, :, axis, None]
-            units.append(a @ np.swapaxes(a, 1, 2) * h1)
-        if layout.unmodelled:  # unmodelled acceleration: constant within a static segment
-            phi[:, DV, layout.ua] = eye3 * (h * track.static)[:, None, None]
-        if layout.markov:
-            units += self._gauss_markov(phi, track, noise, layout)
-        return phi, list(zip(self.term_variances(noise, layout), units))
+        return q + (w0 * accel_variance) @ np.swapaxes(w0, 1, 2) * h1
 
     @staticmethod
     def term_variances(noise: SensorNoise, layout: Layout) -> list[float]:
         """The variances of :meth:`covariance_terms`' terms, in order."""
-        out = [float(v) ** 2 for v in noise.gyro_arw] + [float(v) ** 2 for v in noise.accel_vrw]
-        if layout.markov:
-            out += [float(noise.gyro_bias_instability) ** 2, float(noise.accel_bias_instability) ** 2]
-        return out
+        return [float(np.max(noise.gyro_arw)) ** 2, float(np.max(noise.accel_vrw)) ** 2] + \
+            NoiseSystem._markov_variances(noise, layout)
+
+    @staticmethod
+    def _markov_variances(noise: SensorNoise, layout: Layout) -> list[float]:
+        if not layout.markov:
+            return []
+        return [float(noise.gyro_bias_instability) ** 2, float(noise.accel_bias_instability) ** 2]
 
     def _gauss_markov(self, phi: np.ndarray, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """The biases' part of the transitions (in ``phi``), and their unit covariances (gyro, accelerometer)."""

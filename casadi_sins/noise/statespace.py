@@ -67,6 +67,13 @@ GYRO_FLOOR = 1e-30
 ROTATION_METHOD_ERROR = 4e-5
 
 
+def axis_shape(values) -> np.ndarray:
+    """Per-axis values over their largest (ones when all are zero): the proportions of a noise term's axes."""
+    values = np.asarray(values, dtype=float)
+    top = float(values.max())
+    return values / top if top > 0 else np.ones_like(values)
+
+
 def gauss_markov_integrals(h, tau: float):
     """Discretisation of a first-order Gauss-Markov bias ``b' = -b / tau`` over ``h`` seconds.
 

@@ -1,5 +1,5 @@
 """The compiled Kalman filter (:mod:`noise.filter`) against an independent oracle: the step-by-step NumPy
-filter the package used before it was compiled, on every state layout (raw noise, Gauss-Markov biases,
+filter and discretisation the package used before the filter was compiled, on every state layout (raw noise, Gauss-Markov biases,
 unmodelled terms, free velocity offsets), compiled and on CasADi's virtual machine."""
 
 import dataclasses
@@ -25,7 +25,7 @@ def oracle_whiten(system: NoiseSystem, columns: np.ndarray, noise: SensorNoise):
     previous_end = None
     for track in system.tracks:
         run.start_group(track, previous_end)
-        phi, q = system.transitions(track, noise, run.layout)
+        phi, q = oracle_transitions(system, track, noise, run.layout)
         mids = track.segment_mid
         at_step = track.observations_at
         for k in range(len(track.step_dt)):
@@ -37,6 +37,64 @@ def oracle_whiten(system: NoiseSystem, columns: np.ndarray, noise: SensorNoise):
                 run.observe(track, k, obs)
         previous_end = track.end_time
     return run.out, run.log_det
+
+
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
+
+
+def oracle_transitions(system, track, noise, layout):
+    """The discretisation as the package wrote it before (combined, per step): ``Phi`` and ``Q`` (M, n, n)."""
+    n = layout.n
+    h = track.step_dt
+    c = track.attitude
+    m = len(h)
+    eye3 = np.eye(3)
+    phi = np.tile(np.eye(n), (m, 1, 1))
+    phi[:, PHI, PHI] -= system.earth_cross[None] * h[:, None, None]
+    phi[:, DV, PHI] = system.f_cross[None] * h[:, None, None]
+    # white gyro noise: Phi(u) G = V0 + V1 u (u = time to the end of the step); white accelerometer noise: W0
+    q_g = noise.gyro_arw**2
+    v0 = np.zeros((m, n, 3))
+    v0[:, PHI] = -c
+    v0[:, ACC] = eye3
+    v1 = np.zeros((m, n, 3))
+    v1[:, DV] = -system.f_cross @ c
+    h1, h2, h3 = (h[:, None, None] ** k / k for k in (1, 2, 3))
+    a = (v0 * q_g) @ np.swapaxes(v0, 1, 2)
+    b = (v0 * q_g) @ np.swapaxes(v1, 1, 2)
+    d = (v1 * q_g) @ np.swapaxes(v1, 1, 2)
+    q = a * h1 + (b + np.swapaxes(b, 1, 2)) * h2 + d * h3
+    w0 = np.zeros((m, n, 3))
+    w0[:, DV] = c
+    q += (w0 * noise.accel_vrw**2) @ np.swapaxes(w0, 1, 2) * h1
+    if layout.unmodelled:  # unmodelled acceleration: constant within a static segment
+        phi[:, DV, layout.ua] = eye3 * (h * track.static)[:, None, None]
+    if layout.markov:
+        for sensor, sl, sigma, tau in (("gyro", layout.bg, noise.gyro_bias_instability, noise.gyro_bias_tau),
+                                       ("accel", layout.ba, noise.accel_bias_instability, noise.accel_bias_tau)):
+            beta, gamma1, gamma2 = gauss_markov_integrals(h, tau)
+            phi[:, sl, sl] = eye3 * beta[:, None, None]
+            if sensor == "gyro":
+                phi[:, PHI, sl] = -c * gamma1[:, None, None]
+                phi[:, ACC, sl] = eye3 * gamma1[:, None, None]
+                phi[:, DV, sl] = -(system.f_cross @ c) * gamma2[:, None, None]
+            else:
+                phi[:, DV, sl] = c * gamma1[:, None, None]
+            if sigma == 0.0:
+                continue
+            # Q = (2 sigma^2 / tau) int_0^h Phi(u) G Phi(u)^T... du by 6-point Gauss-Legendre (smooth integrand)
+            for x, wgt in zip(_GAUSS_X, _GAUSS_W):
+                bu, g1, g2 = gauss_markov_integrals(h * (1.0 + x) / 2.0, tau)
+                col = np.zeros((m, n, 3))
+                col[:, sl] = eye3 * bu[:, None, None]
+                if sensor == "gyro":
+                    col[:, PHI] = -c * g1[:, None, None]
+                    col[:, ACC] = eye3 * g1[:, None, None]
+                    col[:, DV] = -(system.f_cross @ c) * g2[:, None, None]
+                else:
+                    col[:, DV] = c * g1[:, None, None]
+                q += (2.0 * sigma**2 / tau) * (wgt * h / 2.0)[:, None, None] * (col @ np.swapaxes(col, 1, 2))
+    return phi, q
 
 
 class _Filter:

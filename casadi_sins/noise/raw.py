@@ -79,24 +79,28 @@ class RawNoise:
 def third_difference_variances(increments: list[np.ndarray], blocks) -> tuple[np.ndarray, np.ndarray]:
     """Mean square of third differences of block sums, per block size and axis, pooled over segments.
 
-    Returns ``(variance (len(blocks), 3), count (len(blocks),))``.
+    Block sums of a size twice the previous one are pairs of the previous sums (one pass over the data
+    for all the octave-spaced sizes).  Returns ``(variance (len(blocks), 3), count (len(blocks),))``.
     """
     variance = np.zeros((len(blocks), 3))
     count = np.zeros(len(blocks))
-    for b, m in enumerate(blocks):
-        total = np.zeros(3)
-        n_total = 0
-        for x in increments:
-            n = len(x) // m
-            if n < 8:
+    for x in increments:
+        x = np.asarray(x, dtype=float)
+        sums, size = x, 1
+        for b, m in enumerate(int(m) for m in blocks):
+            if m == 2 * size:  # n = len(x) // m blocks: the first 2 n sums of the previous size, in pairs
+                pairs = len(sums) // 2
+                sums = sums[0:2 * pairs:2] + sums[1:2 * pairs:2]
+            elif m != size:
+                sums = x[: len(x) // m * m].reshape(-1, m, 3).sum(axis=1)
+            size = m
+            if len(sums) < 8:
                 continue
-            sums = x[: n * m].reshape(n, m, 3).sum(axis=1)
             d3 = np.diff(sums, n=3, axis=0)
-            total += np.sum(d3**2, axis=0)
-            n_total += len(d3)
-        if n_total:
-            variance[b] = total / n_total
-            count[b] = n_total
+            variance[b] += np.sum(d3**2, axis=0)
+            count[b] += len(d3)
+    done = count > 0
+    variance[done] /= count[done][:, None]
     return variance, count
 
 

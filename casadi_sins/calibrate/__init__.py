@@ -18,7 +18,8 @@ from .result import CalibrationError, CalibrationResult
 
 SOLVERS = ("nlp", "ils")
 
-__all__ = ["SOLVERS", "CalibrationError", "CalibrationResult", "calibrate", "calibrate_ils", "calibrate_nlp"]
+__all__ = ["SOLVERS", "CalibrationError", "CalibrationResult", "calibrate", "calibrate_ils", "calibrate_nlp",
+           "prepare_compiled"]
 
 
 def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None = None,
@@ -47,3 +48,26 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
         if solver == "nlp":
             return calibrate_nlp(rec, initial=initial, progress=progress, **options)
         return calibrate_ils(rec, initial=initial, progress=progress, **options)
+
+
+def prepare_compiled(model="21", bias_instability: bool = False) -> None:
+    """Compile (or load from the cache) the functions a calibration runs: the strapdown step and its tangent
+    for the parameter model, the error model, and the Kalman filter of the noise model's state layout.
+
+    Parallel workers then find them compiled instead of compiling the same libraries at once (the first
+    run with an empty cache compiles for a few seconds per library; later ones load them in milliseconds).
+    """
+    from ..model.registry import model_names
+    from ..nav.errormodel import sensitivity_chain
+    from ..nav.navigation import navigation_chain
+    from ..nav.tangent import step_blocks
+    from ..noise.filter import FILTER_COLUMNS, filter_chain, transition_pattern
+    from ..noise.statespace import Layout
+    from .nlp.selection import model_groups
+
+    navigation_chain()
+    sensitivity_chain()
+    step_blocks(model_names(model_groups(model)))
+    layout = Layout(bias_instability, False)
+    for columns in (1, FILTER_COLUMNS):
+        filter_chain(layout.n, columns, transition_pattern(layout).tobytes())

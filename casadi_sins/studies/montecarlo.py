@@ -8,7 +8,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..calibrate import calibrate
+from ..calibrate import calibrate, prepare_compiled
 from ..calibrate.result import CalibrationError
 from ..core.units import DEG_PER_H, UG
 from ..data.problem import Problem
@@ -88,6 +88,8 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
         cluster on this machine: the runs are submitted there instead (needs ``dask[distributed]``).
     """
     task = functools.partial(_seed_rows, problem, tuple(solvers), use_datasheet, model)
+    # compiled here once, not by every worker at the same time (with an empty cache)
+    prepare_compiled(model, use_datasheet and datasheet(problem) is not None)
     rows: list[dict] = []
     for result in run_all(task, list(seeds), workers, scheduler, progress):
         rows += result

@@ -138,38 +138,53 @@ def filter_chain(n: int, ncol: int, pattern_bytes: bytes) -> StepChain:
                      lambda: filter_step_function(n, ncol, pattern))
 
 
-def _rows(system, track: GroupTrack, noise: SensorNoise, ends: list[int]):
-    """One row per observation (in step order, a step's velocity before its gyro mean) and one for the track's
-    end when nothing is observed there: per row the index into ``ends`` of its composed step (-1: the
-    step's second observation, nothing to predict), ``R``, flags and the gyro mean's ``H``; and each
-    observation's residual rows (K, 3)."""
-    observations = sorted(track.observations, key=lambda o: (o.step, int(o.kind)))
-    steps = [obs.step for obs in observations] + ([ends[-1]] if not observations or ends[-1] != observations[-1].step
-                                                   else [])
-    k = len(steps)
-    first = np.array([i == 0 or steps[i] != steps[i - 1] for i in range(k)])
-    composed = np.full(k, -1)
-    composed[first] = np.arange(first.sum())
-    r, flags, h_gyro = np.tile(np.eye(3), (k, 1, 1)), np.zeros((k, 3)), np.zeros((k, 3, 6))
-    velocity = np.array([i for i, obs in enumerate(observations) if obs.kind == ObservationKind.VELOCITY], dtype=int)
-    if len(velocity):
-        at = np.array([observations[i].step for i in velocity])
-        c = track.attitude[at]
-        r[velocity] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
+class _Rows:
+    """A track's rows, as far as they do not depend on the noise levels: one row per observation (in step
+    order, a step's velocity before its gyro mean) and one for the track's end when nothing is observed
+    there.
+
+    Attributes: ``composed`` the index of each row's composed step among the observed steps (-1: a step's
+    second observation, nothing to predict); ``velocity`` and ``gyro`` the rows of each kind; ``free`` which
+    velocity rows set a free offset; the gyro rows' ``H`` on the gyro angle and middle attitude, segment
+    lengths and sway; each observation's residual rows (K, 3).
+    """
+
+    def __init__(self, system, track: GroupTrack, ends: list[int]):
+        observations = sorted(track.observations, key=lambda o: (o.step, int(o.kind)))
+        steps = np.array([obs.step for obs in observations] + (
+            [ends[-1]] if not observations or ends[-1] != observations[-1].step else []), dtype=int)
+        self.k = len(steps)
+        first = np.concatenate([[True], steps[1:] != steps[:-1]])
+        self.composed = np.full(self.k, -1)
+        self.composed[first] = np.arange(first.sum())
+        kinds = np.array([int(obs.kind) for obs in observations], dtype=int)
+        self.velocity = np.flatnonzero(kinds == ObservationKind.VELOCITY)
+        self.gyro = np.flatnonzero(kinds == ObservationKind.GYRO_MEAN)
+        at = steps[self.velocity]
+        self.attitude = track.attitude[at]
         # a free velocity offset from a step on: set by the next velocity observation
         free_so_far = np.cumsum(np.asarray(track.free_velocity, dtype=int))
-        since = free_so_far[at] - np.concatenate([[0], free_so_far[at[:-1]]])
-        flags[velocity, 0], flags[velocity, 1] = 1.0, (since > 0)
-    for i, obs in enumerate(observations):
-        if obs.kind == ObservationKind.GYRO_MEAN:
-            duration = track.segment_duration[obs.segment]
-            r[i] = np.diag(2.0 * noise.gyro_quantization**2 / duration**2 + track.segment_sway.get(obs.segment, 0.0)
-                           + noise.unmodelled_rate**2 + GYRO_FLOOR)
-            h_gyro[i, :, :3] = np.eye(3) / duration
-            h_gyro[i, :, 3:] = track.attitude[track.segment_mid_of[obs.segment]].T @ system.earth_cross
-            flags[i, 2] = 1.0
-    residual_rows = np.array([obs.row + np.arange(3) for obs in observations], dtype=int).reshape(-1, 3)
-    return composed, r, flags, h_gyro, residual_rows
+        self.free = (free_so_far[at] - np.concatenate([[0], free_so_far[at[:-1]]])) > 0
+        segments = [observations[i].segment for i in self.gyro]
+        self.duration = np.array([track.segment_duration[s] for s in segments])
+        self.sway = np.array([np.broadcast_to(track.segment_sway.get(s, 0.0), (3,)) for s in segments]).reshape(-1, 3)
+        self.h_gyro = np.zeros((self.k, 3, 6))
+        self.h_gyro[self.gyro, :, :3] = np.eye(3) / self.duration[:, None, None]
+        for i, s in zip(self.gyro, segments):
+            self.h_gyro[i, :, 3:] = track.attitude[track.segment_mid_of[s]].T @ system.earth_cross
+        self.residual_rows = np.array([obs.row + np.arange(3) for obs in observations], dtype=int).reshape(-1, 3)
+
+    def noise(self, noise: SensorNoise) -> tuple[np.ndarray, np.ndarray]:
+        """``R`` (K, 3, 3) and flags (velocity, free, gyro) (K, 3) of the rows under ``noise``."""
+        r, flags = np.tile(np.eye(3), (self.k, 1, 1)), np.zeros((self.k, 3))
+        c = self.attitude
+        r[self.velocity] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
+        flags[self.velocity, 0], flags[self.velocity, 1] = 1.0, self.free
+        variance = (2.0 * noise.gyro_quantization**2 / self.duration[:, None] ** 2 + self.sway
+                    + noise.unmodelled_rate**2 + GYRO_FLOOR)
+        r[self.gyro] = variance[:, :, None] * np.eye(3)
+        flags[self.gyro, 2] = 1.0
+        return r, flags
 
 
 def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, pattern: np.ndarray, ncol: int,
@@ -182,14 +197,17 @@ def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, p
         raise RuntimeError("a step transition outside its sparsity pattern")
     col_of, row_of = np.nonzero(pattern.T)  # the nonzeros in column-major order
     lower_col, lower_row = np.nonzero(np.tril(np.ones((n, n), bool)).T)
-    composed, r, flags, h_gyro, residual_rows = _rows(system, track, noise, ends)
-    k = len(composed)
+    cache = system.__dict__.setdefault("_rows", {})
+    if id(track) not in cache:
+        cache[id(track)] = _Rows(system, track, ends)
+    rows = cache[id(track)]
+    composed, (r, flags), k = rows.composed, rows.noise(noise), rows.k
     sizes = _data_sizes(n, ncol, len(row_of))
     data = np.zeros((k, sum(sizes)))
     identity = (row_of == col_of).astype(float)
     parts = [np.where(composed[:, None] >= 0, phi[composed][:, row_of, col_of], identity),
              np.where(composed[:, None] >= 0, q[composed][:, lower_row, lower_col], 0.0),
-             np.swapaxes(r, 1, 2).reshape(k, 9), flags, np.swapaxes(h_gyro, 1, 2).reshape(k, 18)]
+             np.swapaxes(r, 1, 2).reshape(k, 9), flags, np.swapaxes(rows.h_gyro, 1, 2).reshape(k, 18)]
     offset = 0
     for part, size in zip(parts, sizes):
         data[:, offset:offset + size] = part
@@ -197,7 +215,7 @@ def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, p
     pad = np.zeros(sum(sizes))  # a row that changes nothing: Phi = I, Q = 0, no observation
     pad[:len(row_of)] = identity
     pad[sum(sizes[:2]):sum(sizes[:3])] = np.eye(3).ravel()
-    return data, residual_rows, pad, offset
+    return data, rows.residual_rows, pad, offset
 
 
 def _start_group(x: np.ndarray, p: np.ndarray, track: GroupTrack, previous_end: float | None, noise: SensorNoise,

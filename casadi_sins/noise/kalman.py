@@ -98,23 +98,29 @@ class NoiseSystem:
         return phi, (self._gauss_markov(phi, track, noise, layout) if layout.markov else [])
 
     def _white(self, track: GroupTrack, layout: Layout, gyro_variance, accel_variance) -> np.ndarray:
-        """The white noise's covariance over each step (M, n, n) for per-axis variances (ARW^2, VRW^2)."""
-        h, c, n = track.step_dt, track.attitude, layout.n
-        m = len(h)
-        # white gyro noise: Phi(u) G = V0 + V1 u (u = time to the end of the step); white accelerometer noise: W0
-        v0 = np.zeros((m, n, 3))
-        v0[:, PHI] = -c
-        v0[:, ACC] = np.eye(3)
-        v1 = np.zeros((m, n, 3))
-        v1[:, DV] = -self.f_cross @ c
+        """The white noise's covariance over each step (M, n, n) for per-axis variances (ARW^2, VRW^2).
+
+        White gyro noise enters as ``Phi(u) G = V0 + V1 u`` (``u`` the time to the end of the step) with
+        ``V0 = (-C; I)`` on (attitude, gyro angle) and ``V1 = -F C`` on velocity (``F = [f^n x]``); white
+        accelerometer noise as ``C`` on velocity.  ``Q = V0 D V0^T h + (V0 D V1^T + V1 D V0^T) h^2 / 2 + V1 D
+        V1^T h^3 / 3 + C D_a C^T h``, written by blocks.
+        """
+        h, c, f = track.step_dt, track.attitude, self.f_cross
         h1, h2, h3 = (h[:, None, None] ** k / k for k in (1, 2, 3))
-        a = (v0 * gyro_variance) @ np.swapaxes(v0, 1, 2)
-        b = (v0 * gyro_variance) @ np.swapaxes(v1, 1, 2)
-        d = (v1 * gyro_variance) @ np.swapaxes(v1, 1, 2)
-        q = a * h1 + (b + np.swapaxes(b, 1, 2)) * h2 + d * h3
-        w0 = np.zeros((m, n, 3))
-        w0[:, DV] = c
-        return q + (w0 * accel_variance) @ np.swapaxes(w0, 1, 2) * h1
+        c_d = c * np.asarray(gyro_variance, dtype=float)  # C D
+        c_d_c = c_d @ np.swapaxes(c, 1, 2)
+        f_c_d = f @ c_d
+        q = np.zeros((len(h), layout.n, layout.n))
+        q[:, PHI, PHI] = c_d_c * h1
+        q[:, PHI, ACC] = -c_d * h1
+        q[:, ACC, PHI] = -np.swapaxes(c_d, 1, 2) * h1
+        q[:, ACC, ACC] = np.diag(gyro_variance) * h1
+        q[:, PHI, DV] = c_d_c @ f.T * h2
+        q[:, DV, PHI] = f @ c_d_c * h2
+        q[:, ACC, DV] = -np.swapaxes(f_c_d, 1, 2) * h2
+        q[:, DV, ACC] = -f_c_d * h2
+        q[:, DV, DV] = f @ c_d_c @ f.T * h3 + (c * np.asarray(accel_variance, dtype=float)) @ np.swapaxes(c, 1, 2) * h1
+        return q
 
     @staticmethod
     def term_variances(noise: SensorNoise, layout: Layout) -> list[float]:

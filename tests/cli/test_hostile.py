@@ -159,7 +159,8 @@ def test_a_full_disk_leaves_nothing_behind_and_names_the_file(recording, tmp_pat
 
 def test_sigterm_is_an_interruption_with_nothing_written_and_no_orphans(recording, tmp_path):
     out = tmp_path / "mc"
-    proc = _run_cli(["montecarlo", "--runs", "4", "--solvers", "ils", "--workers", "2", "--out", str(out)],
+    # enough runs to be still at work after 8 s (the ILS takes about 1 s a run since issue 18)
+    proc = _run_cli(["montecarlo", "--runs", "60", "--solvers", "ils", "--workers", "2", "--out", str(out)],
                     start_new_session=True)
     time.sleep(8.0)
     proc.send_signal(signal.SIGTERM)

@@ -12,6 +12,7 @@ casadi-sins montecarlo --runs 50 --out "$out"                                  #
 python benchmarks/bench_noise.py --runs 50 --no-datasheet --out "$out" | tee "$out/noise-benchmark.txt"
 python benchmarks/bench_extended.py --runs 30 --out "$out" | tee "$out/extended-benchmark.txt"
 python benchmarks/bench_phases.py --out "$out" | tee "$out/main-job-phases.txt"
+python benchmarks/bench_speed.py --out "$out" | tee "$out/speed.txt"             # whole processes, one core (issue 18)
 python benchmarks/bench_long.py --out "$out" | tee "$out/long-file.txt"
 python benchmarks/bench_nlp.py --seeds 50 --out "$out" | tee "$out/nlp-benchmark.txt"
 python benchmarks/bench_ils.py --seeds 20 --out "$out" | tee "$out/ils-benchmark.txt"

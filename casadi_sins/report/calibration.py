@@ -11,6 +11,7 @@ the base motion found.
 from __future__ import annotations
 
 import datetime
+import functools
 import hashlib
 import json
 import math
@@ -36,18 +37,24 @@ def recording_hash(rec) -> str | None:
     """SHA-256 over the recording's TOML and data files (None for a recording made in memory)."""
     if rec.source is None:
         return None
-    digest = hashlib.sha256()
     paths = [Path(rec.source)]
     try:
         data = tomllib.loads(paths[0].read_text(encoding="utf-8")).get("data")
         if data:
             paths.append(paths[0].parent / data)
-        for path in paths:
-            with open(path, "rb") as handle:
-                for block in iter(lambda: handle.read(1 << 20), b""):
-                    digest.update(block)
+        # the table's metadata and the report both ask: the files are read once while they are unchanged
+        return _files_hash(tuple((str(path), path.stat().st_size, path.stat().st_mtime_ns) for path in paths))
     except (OSError, ValueError):
         return None
+
+
+@functools.lru_cache(maxsize=8)
+def _files_hash(files: tuple) -> str:
+    digest = hashlib.sha256()
+    for path, _, _ in files:
+        with open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
     return digest.hexdigest()
 
 

@@ -206,7 +206,8 @@ def phases(work: Path) -> dict:
     return result
 
 
-def report(times: dict, differences: dict, in_process: dict, mc: dict, first: dict, load: tuple, out: Path) -> None:
+def report(times: dict, differences: dict, in_process: dict, mc: dict, first: dict, load: tuple, out: Path,
+           baseline: str = "") -> None:
     """``speed.csv`` (every measured number) and ``speed.md`` (against the targets)."""
     rows = [("whole process", case, tree, measure, value) for case, per_tree in times.items()
             for tree, v in per_tree.items() for measure, value in (("median CPU s", statistics.median(v["cpu"])),
@@ -225,14 +226,16 @@ def report(times: dict, differences: dict, in_process: dict, mc: dict, first: di
     cur = {case: statistics.median(v["current"]["cpu"]) for case, v in times.items()}
     paper = cur["paper NLP"]
     lines = ["# Speed (issue 18)", "", f"Fresh `python -m casadi_sins calibrate` processes, one core, CPU time, median of "
-             f"{len(times['paper NLP']['current']['cpu'])} runs; load average {load[0]:.2f} before, {load[1]:.2f} after.",
-             "", "| case | CPU s | target | ratio to paper NLP | target | " + " | ".join(
-                 f"{t} CPU s" for t in times["paper NLP"] if t != "current") + " |", "|---|---|---|---|---|"
+             f"{len(times['paper NLP']['current']['cpu'])} runs; load average {load[0]:.2f} before, {load[1]:.2f} after"
+             f" (2 cores shared with other work){f'; baseline: {baseline}, run by run alternating' if baseline else ''}.",
+             "", "| case | CPU s | target | ratio to paper NLP | target | met | " + " | ".join(
+                 f"{t} CPU s" for t in times["paper NLP"] if t != "current") + " |", "|---|---|---|---|---|---|"
              + "---|" * (len(times["paper NLP"]) - 1)]
     for case, value in cur.items():
         base = [f"{statistics.median(v['cpu']):.3f}" for t, v in times[case].items() if t != "current"]
+        met = (value <= TARGETS.get(case, float("inf"))) and (value / paper <= RATIO_TARGETS.get(case, float("inf")))
         lines.append(f"| {case} | {value:.3f} | {TARGETS.get(case, '')} | {value / paper:.2f} | "
-                     f"{RATIO_TARGETS.get(case, '')} | " + " | ".join(base) + (" |" if base else ""))
+                     f"{RATIO_TARGETS.get(case, '')} | {'yes' if met else 'no'} | " + " | ".join(base) + (" |" if base else ""))
     lines += ["", "In-process (CPU s): " + ", ".join(f"{k} {v:.3f}" for k, v in in_process.items()
                                                      if k != "nlp phases (wall)"),
               "NLP phases (wall s): " + ", ".join(f"{k} {v:.3f}" for k, v in in_process["nlp phases (wall)"].items()),
@@ -249,6 +252,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--baseline", type=Path, help="another checkout (e.g. of main) to alternate with")
+    parser.add_argument("--baseline-label", default=None, help="what the baseline is, for the report (default: its folder)")
     parser.add_argument("--work", type=Path, help="recordings and caches (default: a temporary folder)")
     parser.add_argument("--mc-runs", type=int, default=6)
     parser.add_argument("--out", type=Path, default=TREE / "results")
@@ -268,7 +272,8 @@ def main():
     in_process = phases(work)
     mc = monte_carlo(trees, work, args.mc_runs)
     first = first_run_and_fallback(work, args.repeats)
-    report(times, differences, in_process, mc, first, (load_before, os.getloadavg()[0]), args.out)
+    label = args.baseline_label or (str(args.baseline) if args.baseline else "")
+    report(times, differences, in_process, mc, first, (load_before, os.getloadavg()[0]), args.out, label)
     print(f"wrote {args.out}/speed.csv and speed.md")
 
 

@@ -143,6 +143,38 @@ t4 = time.process_time()
 print(json.dumps({"import": t1 - t0, "read": t2 - t1, "nlp": t3 - t2, "ils": t4 - t3, "nlp phases (wall)": nlp.timings}))
 """
 
+ROUTES = r"""
+import json, sys, time
+import numpy as np
+from casadi_sins.calibrate.initial import rough_parameters
+from casadi_sins.calibrate.nlp.graph import build_graph
+from casadi_sins.calibrate.steps import default_observation_spacing
+from casadi_sins.data.description import read_recording
+from casadi_sins.noise.kalman import NoiseSystem
+from casadi_sins.noise.plan import plan_noise
+rec = read_recording(sys.argv[1])
+ref = rough_parameters(rec).values
+t = time.process_time(); g = build_graph(rec, ref, default_observation_spacing(rec)); build = time.process_time() - t
+z = np.zeros(g.n_variables)
+def jacobian(z):
+    g.__dict__["_last"] = None  # no kept linearisation: time the evaluation
+    return [np.asarray(m) for m in g.jacobian(z)]
+jacobian(z)
+t = time.process_time()
+for i in range(5): jacobian(z + i * 1e-9)
+jac = (time.process_time() - t) / 5
+t = time.process_time()
+for i in range(5): np.asarray(g.residuals(z + i * 1e-8))
+res = (time.process_time() - t) / 5
+r, J = jacobian(z)
+system = NoiseSystem(g.tracks(np.asarray(g.trajectory(z)), True), rec.site.g, rec.site.earth_rate)
+model = plan_noise(rec, ref).model
+system.whiten(np.column_stack([r.ravel(), J]), model)
+t = time.process_time(); system.whiten(np.column_stack([r.ravel(), J]), model); white = time.process_time() - t
+print(json.dumps({"graph build s": build, "Jacobian ms": 1e3 * jac, "residuals ms": 1e3 * res,
+                  "whitening [r, J] ms": 1e3 * white}))
+"""
+
 MONTE_CARLO = r"""
 import json, sys, time
 t0 = time.perf_counter()
@@ -198,6 +230,18 @@ def first_run_and_fallback(work: Path, repeats: int) -> dict:
     return out
 
 
+def routes(trees: dict, work: Path) -> dict:
+    """The NLP's pieces on the paper's recording (in-process CPU): graph build, one Jacobian, one residual
+    evaluation, one whitening of residuals and Jacobian; per tree, and the current one on the VM."""
+    out = {}
+    variants = dict(trees) | {"current, no compiler": TREE}
+    for name, tree in variants.items():
+        extra = {"CASADI_SINS_NO_COMPILE": "1"} if "no compiler" in name else {}
+        out[name], _ = child_json(ROUTES, [str(work / CASES["paper NLP"][0])], environment(tree, work, **extra))
+        print(f"routes {name}: " + ", ".join(f"{k} {v:.3g}" for k, v in out[name].items()), flush=True)
+    return out
+
+
 def phases(work: Path) -> dict:
     """One in-process calibration of the paper's recording (a fresh process): CPU by step, the NLP's phases."""
     result, _ = child_json(PHASES, [str(work / CASES["paper NLP"][0])], environment(TREE, work))
@@ -206,8 +250,8 @@ def phases(work: Path) -> dict:
     return result
 
 
-def report(times: dict, differences: dict, in_process: dict, mc: dict, first: dict, load: tuple, out: Path,
-           baseline: str = "") -> None:
+def report(times: dict, differences: dict, in_process: dict, mc: dict, first: dict, pieces: dict, load: tuple,
+           out: Path, baseline: str = "") -> None:
     """``speed.csv`` (every measured number) and ``speed.md`` (against the targets)."""
     rows = [("whole process", case, tree, measure, value) for case, per_tree in times.items()
             for tree, v in per_tree.items() for measure, value in (("median CPU s", statistics.median(v["cpu"])),
@@ -217,6 +261,7 @@ def report(times: dict, differences: dict, in_process: dict, mc: dict, first: di
     rows += [("in-process", "paper", "current", k, v) for k, v in in_process.items() if k != "nlp phases (wall)"]
     rows += [("in-process NLP phase (wall)", "paper", "current", k, v) for k, v in in_process["nlp phases (wall)"].items()]
     rows += [("monte carlo", "kang2013", tree, k, v) for tree, d in mc.items() for k, v in d.items()]
+    rows += [("routes", "paper", tree, k, v) for tree, d in pieces.items() for k, v in d.items()]
     rows += [("first run", "paper NLP", "current", f"{k} {m} s", v) for k, d in first.items() for m, v in d.items()]
     rows += [("result difference", case, "baseline vs current", m, v) for case, d in differences.items()
              for m, v in zip(("max |dvalue|/sigma", "max |dsigma|/sigma"), d)]
@@ -241,6 +286,8 @@ def report(times: dict, differences: dict, in_process: dict, mc: dict, first: di
               "NLP phases (wall s): " + ", ".join(f"{k} {v:.3f}" for k, v in in_process["nlp phases (wall)"].items()),
               "", "Monte Carlo (both solvers per run): " + "; ".join(
                   f"{t}: " + ", ".join(f"{k} {v:.3g}" for k, v in d.items()) for t, d in mc.items()),
+              "", "The NLP's pieces on the paper's recording (CPU): " + "; ".join(
+                  f"{t}: " + ", ".join(f"{k} {v:.3g}" for k, v in d.items()) for t, d in pieces.items()),
               "", "Paper NLP: " + "; ".join(f"{k}: CPU {d['cpu']:.2f} s, wall {d['wall']:.2f} s" for k, d in first.items())]
     if differences:
         lines += ["", "| result difference (baseline vs current) | max abs(dvalue)/sigma | max abs(dsigma)/sigma |",
@@ -272,8 +319,9 @@ def main():
     in_process = phases(work)
     mc = monte_carlo(trees, work, args.mc_runs)
     first = first_run_and_fallback(work, args.repeats)
+    pieces = routes(trees, work)
     label = args.baseline_label or (str(args.baseline) if args.baseline else "")
-    report(times, differences, in_process, mc, first, (load_before, os.getloadavg()[0]), args.out, label)
+    report(times, differences, in_process, mc, first, pieces, (load_before, os.getloadavg()[0]), args.out, label)
     print(f"wrote {args.out}/speed.csv and speed.md")
 
 

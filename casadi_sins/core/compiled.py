@@ -147,7 +147,7 @@ def cached_functions(tag: str, key: str, names: list[str], build: Callable[[], l
     functions = build()
     failure = _compile(_generate(functions, tag), library)
     if failure is not None:
-        note(f"{failure}: CasADi's virtual machine computes instead (the same results, several times slower)")
+        note(f"{failure}: CasADi's virtual machine computes instead (the same results, slower)")
         return functions
     return _load(names, library) or functions
 

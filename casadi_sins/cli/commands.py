@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import time
@@ -13,6 +14,7 @@ from ..calibrate import calibrate
 from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
 from ..core.earth import Site
+from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
 from ..data.description import description_toml, read_recording
@@ -24,6 +26,7 @@ from ..nav.navigation import navigate
 from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
+from ..report.provenance import read_provenance
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
@@ -116,9 +119,13 @@ def cmd_segment(args) -> int:
 def cmd_export(args) -> int:
     """``export``: a table as compensation matrices or the PSINS struct."""
     params = read_table(args.table)
-    metadata = {k: v for k, v in (("unit_id", args.unit_id), ("table", str(args.table))) if v}
+    origin = read_provenance(args.table)  # the companion report's unit id, date and recording hash
+    if args.unit_id and origin.unit_id and args.unit_id != origin.unit_id:
+        raise CliError(f"{args.table}: --unit-id {args.unit_id} but the table's report says unit {origin.unit_id}")
+    metadata = {**origin.metadata(), **({"unit_id": args.unit_id} if args.unit_id else {})}
     atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
-    print(f"wrote {args.out} ({args.format})")
+    print(f"wrote {args.out} ({args.format})" + ("" if origin.from_report else
+                                                 "; note: no companion report beside the table, so no recording hash"))
     return 0
 
 
@@ -143,7 +150,9 @@ def cmd_calibrate(args) -> int:
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id))
     files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver}))
+        "unit_id": args.unit_id, "table": str(args.out), "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(),
+        "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
+        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.version import __version__
+from ..core.version import __version__, software_versions
 from ..calibrate.result import CalibrationResult
 from ..core.units import DEG_PER_H, UG
 from ..data.recording import Recording
@@ -102,6 +102,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "format": "casadi-sins-report/1",
         "software": f"casadi-sins {__version__}",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "versions": software_versions(),
         "command": command,
         "unit_id": unit_id,
         "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
@@ -147,6 +148,7 @@ def report_markdown(data: dict) -> str:
     lines = [f"# Calibration report: {rec['name']} ({data['solver']})", "",
              f"- unit: {data.get('unit_id') or '(no --unit-id given)'}",
              f"- software: {data['software']}, created {data['created']}",
+             "- versions: " + ", ".join(f"{k} {v}" for k, v in data.get("versions", {}).items()),
              f"- recording: {rec['source'] or '(in memory)'}, sha256 `{rec['sha256']}`",
              f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
              f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]

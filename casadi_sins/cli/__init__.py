@@ -12,7 +12,8 @@ from .commands import CliError
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
-FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo"}
+FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "apply",
+                  "history", "batch"}
 
 __all__ = ["main", "build_parser", "CliError"]
 

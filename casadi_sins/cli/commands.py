@@ -27,6 +27,7 @@ from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
 from ..report.provenance import read_provenance
+from ..report.rounding import rounded
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
@@ -179,7 +180,8 @@ def cmd_compare(args) -> int:
     table = comparison.table
     cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
     if truth is not None:
-        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+        print(rounded(table, {c: c.replace("error", "sigma") for c in cols if "error" in c}, signed=True)[cols]
+              .to_string(index=False))
     print(f"wrote the comparison to {args.out}")
     return 0
 
@@ -258,7 +260,8 @@ def cmd_demo(args) -> int:
     comparison = demo.comparison
     print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
     cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
-    print(comparison.table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print(rounded(comparison.table[cols], {c: "nlp sigma (natural)" for c in cols[2:4]}, signed=True)
+          .to_string(index=False))
     print("navigation check, 1 h static free-inertial after alignment:")
     print(demo.navigation.to_string(index=False, float_format=_number_format()))
     print("error budget of static navigation with the NLP's parameters (1 sigma, m):")

@@ -28,6 +28,7 @@ from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from .plots import noise_plot, residual_plot
+from .rounding import rounded, sigma_in_value_unit
 from .tables import calibration_tables, markdown_table, natural_noise_frame
 
 
@@ -170,8 +171,12 @@ def report_markdown(data: dict) -> str:
     frame = pd.DataFrame(data["parameters"])
     cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
     cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
-    lines.append(markdown_table(frame[cols], "%.6g"))
-    lines += ["", "SI values (the table to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
+                       zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
+    shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
+    lines.append(markdown_table(shown[cols], "%.3g"))
+    lines += ["", "Values rounded to the second significant digit of their sigma; the full SI values (the table "
+              "to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
               "## Noise", ""]
     noise = data["noise"]
     models = {k: SensorNoise.from_natural(v) for k, v in (("raw data", noise["raw"]), ("in the model", noise["model"]),

@@ -14,7 +14,7 @@ from ..data.segmentation import refine
 from ..data.tables import read_table
 from ..data.tolerance import read_tolerance_sheet
 from ..report.provenance import read_provenance
-from ..report.rounding import format_with_sigma
+from ..report.rounding import format_sigma, format_with_sigma
 from ..report.tables import frame_files
 from ..studies.apply import apply_files, apply_table
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
@@ -58,9 +58,12 @@ def cmd_history(args) -> int:
     shown = summary.copy()
     shown["change"] = [format_with_sigma(c, s, signed=True) for c, s in zip(shown["change_first_to_last"],
                                                                            shown["combined_sigma"])]
+    shown["drift_per_year"] = [format_with_sigma(d, s, signed=True) for d, s in zip(shown["drift_per_year"],
+                                                                                   shown["drift_sigma_per_year"])]
+    shown["combined_sigma"] = [format_sigma(s) for s in shown["combined_sigma"]]
     cols = ["parameter", "unit", "change", "combined_sigma", "z_first_to_last", "max_abs_z", "drift_per_year",
             "flagged", "status"]
-    print(shown[cols].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(shown[cols].to_string(index=False, float_format=lambda x: f"{x:+.2f}"))  # z
     flagged = list(summary.loc[summary["flagged"], "parameter"])
     failed = list(summary.loc[summary["status"] == "fail", "parameter"])
     print(f"{len(cals)} calibrations; changed beyond {sheet.z_limit if sheet else 4.0:g} sigma: "

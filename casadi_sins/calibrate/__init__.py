@@ -36,6 +36,8 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
     **options
         Passed to :func:`calibrate_nlp` or :func:`calibrate_ils`.
 
+    Notes
+    -----
     BLAS is held to one thread meanwhile: the matrices are small, and threads spinning on them slow
     the solve down by several times on a loaded machine.
     """

@@ -1,12 +1,23 @@
-"""The command line ``casadi-sins``: parsing and printing only; the work is done by the library."""
+"""The command line ``casadi-sins``: parsing and printing only; the work is done by the library.
+
+Every failure is one line on standard error naming the file (and line) at fault, with exit status
+2; Ctrl-C prints ``interrupted`` (130), SIGTERM or SIGHUP ``terminated`` (143); nothing is left
+half-written (every command writes its outputs together) and no worker process outlives the command.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 import sys
+import threading
+import traceback
 
 from ..calibrate.result import CalibrationError
 from ..core.errors import InputError, OutputError
 from ..core.files import check_writable
+from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
 from .parser import build_parser
@@ -15,26 +26,74 @@ from .parser import build_parser
 FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "apply",
                   "history", "batch"}
 
-__all__ = ["main", "build_parser", "CliError"]
+__all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP: handled as Ctrl-C is (everything stops, nothing half-written), told apart."""
+
+
+@contextlib.contextmanager
+def _termination_handled():
+    """SIGTERM and SIGHUP raise :class:`Terminated` in the main thread while the command runs."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated(signal.Signals(signum).name)
+
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run ``casadi-sins`` with ``argv``; returns the exit status (0, 2 for a failure told in one line,
-    130 interrupted)."""
+    """Run ``casadi-sins`` with ``argv``; returns the exit status (0; 2 for a failure told in one line; 130
+    interrupted; 143 terminated)."""
     args = build_parser().parse_args(argv)
+    name = f"casadi-sins {args.command}"
     try:
-        if getattr(args, "out", None):
-            check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
-        with single_threaded():
-            return args.func(args)
+        with _termination_handled():
+            if getattr(args, "out", None):
+                check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
+            with single_threaded():
+                return args.func(args)
     except (InputError, OutputError, CliError, CalibrationError) as exc:
-        print(f"casadi-sins {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(name, one_line(exc, 2000))
+    except Terminated:
+        print("terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        return _fail(name, "not enough memory for this command (a larger machine, or a shorter recording)")
+    except ImportError as exc:
+        return _fail(name, f"cannot load {exc.name or 'a module'} ({one_line(exc)}): reinstall casadi-sins, or "
+                     "free memory")
     except OSError as exc:  # a file system failure: one line naming the file, never a traceback
         where = exc.filename or ""
-        print(f"casadi-sins {args.command}: error: {where}{': ' if where else ''}{exc.strerror or exc}",
-              file=sys.stderr)
-        return 2
+        return _fail(name, f"{where}{': ' if where else ''}{exc.strerror or one_line(exc)}")
+    except Exception as exc:  # a fault of ours: still one line, the traceback on request
+        if os.environ.get("CASADI_SINS_DEBUG"):
+            traceback.print_exc()
+        return _fail(name, f"internal error ({type(exc).__name__}: {one_line(exc)}); set CASADI_SINS_DEBUG=1 "
+                     "for the traceback and report it", status=1)
+
+
+def _fail(name: str, message: str, status: int = 2) -> int:
+    print(f"{name}: error: {message}", file=sys.stderr)
+    return status
+
+
+def console() -> None:
+    """The ``casadi-sins`` console script: :func:`main`, then an exit that no late signal can turn into a
+    traceback (the interpreter's shutdown ignores Ctrl-C and SIGTERM)."""
+    status = main()
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_IGN)
+    sys.exit(status)

@@ -101,7 +101,7 @@ def cmd_segment(args) -> int:
     data = Path(args.data)
     if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
         raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
-    time_, pulses = read_samples(data.resolve(), args.rate)
+    time_, pulses = read_samples(data, args.rate)
     site = Site(np.radians(args.latitude), args.height, args.gravity)
     name = args.name or Path(args.out).stem
     try:
@@ -109,7 +109,7 @@ def cmd_segment(args) -> int:
     except ValueError as exc:
         raise CliError(f"{data}: {exc}") from None
     out = Path(args.out)
-    atomic_write_text(out, description_toml(rec, os.path.relpath(data.resolve(), out.resolve().parent)))
+    atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
     for note in notes:
         print(f"note: {note}")
     print(recording_summary(rec))

@@ -25,6 +25,8 @@ class InputError(ValueError):
     line, column : int or str, optional
         Where in the file (1-based line; column by name or number).
 
+    Notes
+    -----
     The string is ``"PATH, line L, column C: message"``.
     """
 

@@ -30,18 +30,29 @@ def safe_stem(name: str) -> str:
 @contextlib.contextmanager
 def atomic_open(path: str | Path, mode: str = "wb", **options):
     """A file object on a temporary file in ``path``'s folder, renamed to ``path`` when the block ends
-    without an error (and removed when it does not)."""
+    without an error (and removed, with any folder made for it, when it does not).
+
+    Raises
+    ------
+    OutputError
+        Naming ``path`` when the file system refuses it.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    made: list[Path] = []
+    tmp = None
     try:
+        _make_folders(path.parent, made)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
         with os.fdopen(fd, mode, **options) as handle:
             yield handle
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
+    except BaseException as exc:
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
+        _remove_folders(made)
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(f"{path}: cannot be written ({exc.strerror or exc})") from None
         raise
 
 
@@ -60,8 +71,9 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 def check_writable(path: str | Path, directory: bool = False) -> Path:
     """Fail early (before any computation) when ``path`` cannot be written.
 
-    A file target must not be a folder and its folder must be creatable and writable; a folder target
-    must not be a file.
+    A file target must not be a folder, a folder target not a file.  The place is probed by creating
+    (and removing) a temporary file in the target's own folder, or in its nearest existing ancestor when
+    the folder is still to be made: permissions, read-only and full file systems show there.
 
     Raises
     ------
@@ -79,37 +91,79 @@ def check_writable(path: str | Path, directory: bool = False) -> Path:
         folder = path.parent
     probe = folder
     while not probe.exists():  # the first existing ancestor must let us create the rest
+        if probe == probe.parent:
+            break
         probe = probe.parent
     if not probe.is_dir():
         raise OutputError(f"{path}: {probe} is a file, not a folder")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise OutputError(f"{path}: {probe} is not writable")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".casadi-sins-probe.", dir=probe)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write in {probe} ({exc.strerror or exc})") from None
     return path
+
+
+def _make_folders(folder: Path, made: list[Path]) -> None:
+    """Create ``folder`` and its missing parents, remembering each one made (to remove them on failure)."""
+    missing = []
+    probe = folder
+    while not probe.exists():
+        missing.append(probe)
+        probe = probe.parent
+    for item in reversed(missing):
+        item.mkdir()
+        made.append(item)
+
+
+def _remove_folders(made: list[Path]) -> None:
+    for item in reversed(made):
+        try:
+            item.rmdir()  # only when still empty
+        except OSError:
+            pass
 
 
 def write_files(files: dict) -> list[Path]:
     """Write several files as one: all are staged as temporary files first and renamed only when every
-    one was written, so that a failure leaves none of them (and no temporary) behind.
+    one was written, so that a failure (a full disk, a signal) leaves none of them, no temporary and no
+    folder made for them behind.
 
     Parameters
     ----------
-    files : dict of Path -> bytes
+    files : dict of Path -> bytes or callable
+        The content, or a function that writes it into a binary file object (large files, in chunks).
+
+    Raises
+    ------
+    OutputError
+        Naming the file that could not be written.
     """
     staged: list[tuple[str, Path]] = []
+    made: list[Path] = []
+    current = None
     try:
         for path, data in files.items():
-            path = Path(path)
-            path.parent.mkdir(parents=True, exist_ok=True)
+            current = path = Path(path)
+            _make_folders(path.parent, made)
             fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             staged.append((tmp, path))
             with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
+                if callable(data):
+                    data(handle)
+                else:
+                    handle.write(data)
             os.chmod(tmp, 0o666 & ~_umask())
         for tmp, path in staged:
+            current = path
             os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         for tmp, _ in staged:
             if os.path.exists(tmp):
                 os.unlink(tmp)
+        _remove_folders(made)
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(f"{current}: cannot be written ({exc.strerror or exc})") from None
         raise
     return [path for _, path in staged]

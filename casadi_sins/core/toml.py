@@ -7,6 +7,12 @@ import tomllib
 from pathlib import Path
 
 from .errors import InputError
+from .inputs import check_input_file
+
+#: Every TOML input of the project (descriptions, problems, datasheets, sheets, schemes) is small.
+MAX_TOML_BYTES = 4_000_000
+#: Deepest nesting of tables and arrays any of them needs.
+MAX_DEPTH = 8
 
 
 def read_toml(path: str | Path, what: str) -> dict:
@@ -35,12 +41,9 @@ def read_toml_text(path: str | Path, what: str) -> tuple[dict, str]:
         Naming the file (and the line) of a missing, unreadable, non-UTF-8 or invalid file.
     """
     path = Path(path)
-    if path.is_dir():
-        raise InputError(path, f"is a folder, not a {what}")
+    check_input_file(path, what, MAX_TOML_BYTES)
     try:
         raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(path, f"no such {what}") from None
     except OSError as exc:
         raise InputError(path, f"cannot be read ({exc.strerror or exc})") from None
     try:
@@ -49,6 +52,22 @@ def read_toml_text(path: str | Path, what: str) -> tuple[dict, str]:
         line = raw[: exc.start].count(b"\n") + 1
         raise InputError(path, f"not UTF-8 text (byte {raw[exc.start]:#04x})", line=line) from None
     try:
-        return tomllib.loads(text), text
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(path, f"not valid TOML for a {what}: {exc}") from None
+    except RecursionError:
+        raise InputError(path, f"nested too deeply for a {what}") from None
+    if _depth(doc) > MAX_DEPTH:
+        raise InputError(path, f"nested more than {MAX_DEPTH} levels deep: not a {what}")
+    return doc, text
+
+
+def _depth(value, level: int = 0) -> int:
+    """Nesting depth of tables and arrays (stops counting past the limit)."""
+    if level > MAX_DEPTH:
+        return level
+    if isinstance(value, dict):
+        return max((_depth(v, level + 1) for v in value.values()), default=level + 1)
+    if isinstance(value, list):
+        return max((_depth(v, level + 1) for v in value), default=level + 1)
+    return level

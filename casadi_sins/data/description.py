@@ -31,10 +31,14 @@ from pathlib import Path
 from ..core import orientation as orient
 from ..core.earth import Site
 from ..core.errors import InputError, shown
-from ..core.files import atomic_write_text
+from ..core.files import write_files
 from ..core.toml import array_table_lines, read_toml_text
 from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
-from .samples import read_samples, write_samples
+from .samples import read_samples, samples_writer
+
+
+#: The longest recording name (it becomes file names and report titles).
+MAX_NAME = 200
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -50,6 +54,9 @@ def read_recording(path: str | Path) -> Recording:
     if doc.get("format") != FORMAT:
         raise InputError(path, f"format must be {FORMAT!r}, found {shown(doc.get('format'))}")
     name = _require(doc, "name", str, path)
+    if not name or len(name) > MAX_NAME or not name.isprintable():
+        raise InputError(path, f"'name' must be one line of 1 to {MAX_NAME} printable characters, found "
+                         f"{shown(name)}")
     data_name = _require(doc, "data", str, path)
     if not data_name.strip():
         raise InputError(path, "'data' is empty; it must name the CSV of samples")
@@ -61,7 +68,7 @@ def read_recording(path: str | Path) -> Recording:
     if not 1.0 <= rate_hz <= 1e5:
         raise InputError(path, f"[imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz:g}")
     segments = _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments"))
-    data_path = (path.parent / data_name).resolve()
+    data_path = path.parent / data_name
     time, pulses = read_samples(data_path, rate_hz)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time,
                     gyro=pulses[:, :3], accel=pulses[:, 3:], source=path)
@@ -194,10 +201,14 @@ def description_toml(rec: Recording, data_name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_recording(rec: Recording, toml_path: str | Path) -> Path:
-    """Write ``NAME.toml`` and its CSV (same stem) atomically; returns the TOML path."""
+def recording_files(rec: Recording, toml_path: str | Path) -> dict:
+    """``{path: content}`` of a recording: ``NAME.toml`` and its CSV (same stem), for :func:`write_files`."""
     toml_path = Path(toml_path)
     csv_path = toml_path.with_suffix(".csv")
-    write_samples(csv_path, rec)
-    atomic_write_text(toml_path, description_toml(rec, csv_path.name))
-    return toml_path
+    return {csv_path: samples_writer(rec), toml_path: description_toml(rec, csv_path.name).encode("utf-8")}
+
+
+def write_recording(rec: Recording, toml_path: str | Path) -> Path:
+    """Write ``NAME.toml`` and its CSV (same stem) together; returns the TOML path."""
+    write_files(recording_files(rec, toml_path))
+    return Path(toml_path)

@@ -6,54 +6,126 @@ pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files
 
 from __future__ import annotations
 
+import csv
+import io
+import math
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ..core.errors import InputError
-from ..core.files import atomic_open
+from ..core.errors import InputError, shown
+from ..core.inputs import check_input_file, check_memory_for, decompression_errors, first_line, open_binary
 from .recording import COLUMNS, PULSE_COLUMNS, TIME_TOLERANCE
+
+
+#: More columns than this is not a CSV of samples (the format has 7; extra columns are allowed).
+MAX_COLUMNS = 1000
+_FIELDS = re.compile(r"Expected (\d+) fields in line (\d+), saw (\d+)")
 
 
 def read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
 
-    Floats are parsed directly (8 bytes a value: 14 million rows in about 1 GB); only when that fails is
-    the file read again as text, to name the line and column at fault.
+    Every row must have exactly the header's number of fields (a comma inside a number would shift the
+    columns); the columns are found by name, extra ones are ignored.  Floats are parsed directly (8 bytes
+    a value: 14 million rows in about 1 GB); only when that fails is the file read again row by row, to
+    name the line and column at fault.
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and column of the first problem.
     """
-    if data_path.is_dir():
-        raise InputError(data_path, "is a folder; 'data' must name the CSV of samples")
+    size = check_input_file(data_path, "data file (the CSV of samples that 'data' must name)")
+    check_memory_for(data_path, size)
     try:
-        header = pd.read_csv(data_path, nrows=0, skipinitialspace=True)
-    except FileNotFoundError:
-        raise InputError(data_path, "data file not found") from None
+        columns = _header(data_path)
+        values = _parse(data_path, columns)
+    except InputError:
+        raise
+    except MemoryError:
+        raise InputError(data_path, "not enough memory to read it") from None
     except UnicodeDecodeError:
         _raise_encoding_error(data_path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise InputError(data_path, f"not a readable CSV ({exc})") from None
-    except OSError as exc:
-        raise InputError(data_path, f"cannot be read ({exc.strerror or exc})") from None
-    names = {str(c).strip(): c for c in header.columns}
-    missing = [c for c in COLUMNS if c not in names]
+    except pd.errors.EmptyDataError:
+        raise InputError(data_path, "fewer than two samples") from None
+    except decompression_errors() as exc:
+        raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
+                         if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
+    return _check_time(data_path, values, rate_hz)
+
+
+def _header(data_path: Path) -> list[str]:
+    """The header's column names (stripped), checked for the format's columns."""
+    line = first_line(data_path)
+    columns = [c.strip() for c in next(csv.reader([line]), [])]
+    if len(columns) > MAX_COLUMNS:
+        raise InputError(data_path, f"the header has {len(columns)} columns, more than {MAX_COLUMNS}: not a CSV of "
+                         "samples", line=1)
+    missing = [c for c in COLUMNS if c not in columns]
     if missing:
         raise InputError(data_path, f"missing column(s) {', '.join(missing)}; header must contain "
                          f"{','.join(COLUMNS)}", line=1)
+    repeated = sorted({c for c in COLUMNS if columns.count(c) > 1})
+    if repeated:
+        raise InputError(data_path, f"column(s) {', '.join(repeated)} given twice", line=1)
+    return columns
+
+
+def _parse(data_path: Path, columns: list[str]) -> np.ndarray:
+    """All rows as floats, the format's columns in order; every row with exactly the header's fields."""
+    width = len(columns)
+    take = [columns.index(c) for c in COLUMNS]
     try:
-        try:
-            frame = pd.read_csv(data_path, usecols=[names[c] for c in COLUMNS], dtype=np.float64,
-                                skipinitialspace=True, engine="c")
-            values = frame[[names[c] for c in COLUMNS]].to_numpy(dtype=float)
-            if not np.all(np.isfinite(values)):
-                values = _read_samples_slowly(data_path, names)  # names the text at fault
-        except (ValueError, TypeError) as exc:
-            if isinstance(exc, (InputError, UnicodeDecodeError)):
-                raise
-            values = _read_samples_slowly(data_path, names)
-    except UnicodeDecodeError:
-        _raise_encoding_error(data_path)
-    except (pd.errors.ParserError, OSError) as exc:
-        raise InputError(data_path, f"not a readable CSV ({exc})") from None
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", pd.errors.ParserWarning)  # never drop fields silently
+            frame = pd.read_csv(data_path, header=None, skiprows=1, names=list(range(width)), index_col=False,
+                                dtype=np.float64, skipinitialspace=True, engine="c")
+    except pd.errors.ParserError as exc:
+        found = _FIELDS.search(str(exc))
+        if found:
+            raise InputError(data_path, f"{found.group(3)} fields, the header has {found.group(1)}",
+                             line=int(found.group(2))) from None
+        return _read_rows(data_path, columns)
+    except (ValueError, TypeError, pd.errors.ParserWarning):
+        return _read_rows(data_path, columns)  # names the text at fault
+    values = frame.to_numpy(dtype=float)[:, take]
+    if len(frame) and (not np.all(np.isfinite(values)) or frame.isna().to_numpy().any()):
+        return _read_rows(data_path, columns)
+    return values
+
+
+def _read_rows(data_path: Path, columns: list[str]) -> np.ndarray:
+    """Read row by row (only after the fast parse failed) to name the first line at fault."""
+    take = [columns.index(c) for c in COLUMNS]
+    rows = []
+    with io.TextIOWrapper(open_binary(data_path), encoding="utf-8", newline="") as handle:
+        reader = csv.reader(handle, skipinitialspace=True)
+        next(reader, None)
+        for row in reader:
+            line = reader.line_num
+            if not row or row == [""]:
+                continue
+            if len(row) != len(columns):
+                raise InputError(data_path, f"{len(row)} fields, the header has {len(columns)}", line=line)
+            values = []
+            for j in take:
+                try:
+                    value = float(row[j])
+                except ValueError:
+                    value = float("nan")
+                if not math.isfinite(value):
+                    raise InputError(data_path, f"{shown(row[j])} is not a finite number", line=line, column=columns[j])
+                values.append(value)
+            rows.append(values)
+    return np.array(rows, dtype=float).reshape(-1, len(COLUMNS))
+
+
+def _check_time(data_path: Path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Time strictly increasing at the uniform rate; returns ``(time, pulses)``."""
     if len(values) < 2:
         raise InputError(data_path, "fewer than two samples")
     time = values[:, 0]
@@ -71,29 +143,10 @@ def read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarra
     return time, values[:, 1:]
 
 
-def _read_samples_slowly(data_path: Path, names: dict) -> np.ndarray:
-    """Read as text to name the first value that is not a finite number."""
-    frame = pd.read_csv(data_path, dtype=str, keep_default_na=False, skipinitialspace=True,
-                        usecols=[names[c] for c in COLUMNS])
-    values = np.empty((len(frame), len(COLUMNS)))
-    for j, col in enumerate(COLUMNS):
-        numeric = pd.to_numeric(frame[names[col]], errors="coerce").to_numpy(dtype=float)
-        bad = ~np.isfinite(numeric)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise InputError(data_path, f"{frame[names[col]].iloc[row]!r} is not a finite number", line=row + 2,
-                             column=col)
-        values[:, j] = numeric
-    return values
-
-
 def _raise_encoding_error(data_path: Path):
     """Name the line of the first byte that is not UTF-8."""
-    import gzip
-
-    opener = gzip.open if data_path.suffix == ".gz" else open
     line = 1
-    with opener(data_path, "rb") as handle:
+    with open_binary(data_path) as handle:
         for line, raw in enumerate(handle, start=1):
             try:
                 raw.decode("utf-8")
@@ -118,10 +171,13 @@ def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: sli
     return frame.to_csv(index=False, header=header, lineterminator="\n")
 
 
-def write_samples(path: Path, rec) -> Path:
-    """The CSV of a recording, written in chunks to a temporary file and renamed when complete."""
-    with atomic_open(path, "w", encoding="utf-8", newline="") as handle:
+def samples_writer(rec):
+    """A function writing the CSV of a recording into a binary file object, in chunks (see
+    :func:`core.files.write_files`)."""
+
+    def write(handle) -> None:
         for first in range(0, len(rec.time), CSV_CHUNK):
             handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                     header=first == 0))
-    return path
+                                     header=first == 0).encode("utf-8"))
+
+    return write

@@ -6,13 +6,14 @@ file has ``parameter,unit,value``.  Rows of the extra groups follow the paper's 
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..core.errors import InputError, shown
 from ..core.files import atomic_write_text
+from ..core.inputs import check_input_file
 from ..core.units import TO_SI, dimension_of
 from ..model.parameters import ParameterSet
 from ..model.registry import groups_in, is_known, model_names, unit_of
@@ -35,8 +36,14 @@ def write_table(path: str | Path, params: ParameterSet, truth: ParameterSet | No
     return atomic_write_text(path, table_text(params, truth, as_truth))
 
 
+#: A parameter table is a few dozen rows.
+MAX_TABLE_BYTES = 1_000_000
+
+
 def read_table(path: str | Path) -> ParameterSet:
     """Read a parameter table or truth file; values in other known units are converted to SI.
+
+    Every row must have exactly the header's number of fields.
 
     Raises
     ------
@@ -44,43 +51,13 @@ def read_table(path: str | Path) -> ParameterSet:
         Naming the file and line of a missing, unknown, repeated or non-finite entry.
     """
     path = Path(path)
-    try:
-        frame = pd.read_csv(path, dtype={"parameter": str, "unit": str})
-    except FileNotFoundError:
-        raise InputError(path, "no such parameter table") from None
-    except IsADirectoryError:
-        raise InputError(path, "is a folder, not a parameter table") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise InputError(path, f"not a CSV parameter table ({exc})") from None
-    for col in ("parameter", "unit", "value"):
-        if col not in frame.columns:
-            raise InputError(path, f"missing column {col!r} (header must start parameter,unit,value)", line=1)
+    check_input_file(path, "parameter table", MAX_TABLE_BYTES)
+    header, rows = _rows(path)
     values: dict[str, float] = {}
     sigmas: dict[str, float] = {}
-    for row, rec in enumerate(frame.itertuples(index=False)):
-        line = row + 2
-        name = str(rec.parameter).strip()
-        if not is_known(name):
-            raise InputError(path, f"unknown parameter {shown(name)}", line=line)
-        if name in values:
-            raise InputError(path, f"parameter {name!r} given twice", line=line)
-        unit = str(rec.unit).strip()
-        if unit not in TO_SI:
-            raise InputError(path, f"unknown unit {shown(unit)} for {name}", line=line)
-        if dimension_of(unit) != dimension_of(unit_of(name)):
-            raise InputError(path, f"unit {unit!r} does not fit {name} (expected {unit_of(name)})", line=line)
-        try:
-            value = float(rec.value)
-        except (TypeError, ValueError):
-            raise InputError(path, f"value {shown(rec.value)} of {name} is not a number", line=line) from None
-        if not np.isfinite(value):
-            raise InputError(path, f"value of {name} is not finite", line=line)
-        values[name] = value * TO_SI[unit]
-        sigma = getattr(rec, "sigma", np.nan)
-        try:
-            sigmas[name] = float(sigma) * TO_SI[unit]
-        except (TypeError, ValueError):
-            sigmas[name] = np.nan
+    for line, row in rows:
+        name, value, sigma = _entry(path, line, dict(zip(header, row)), values)
+        values[name], sigmas[name] = value, sigma
     names = model_names(groups_in(values))
     missing = [n for n in names if n not in values]
     if missing:
@@ -88,3 +65,51 @@ def read_table(path: str | Path) -> ParameterSet:
     sig = np.array([sigmas[n] for n in names])
     return ParameterSet(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig,
                         names=names)
+
+
+def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """Header and ``(line, fields)`` of every non-empty row; each row exactly as wide as the header."""
+    try:
+        with open(path, encoding="utf-8", newline="") as handle:
+            reader = csv.reader(handle)
+            header = [c.strip() for c in next(reader, [])]
+            rows = [(reader.line_num, row) for row in reader if row and row != [""]]
+    except UnicodeDecodeError as exc:
+        raise InputError(path, f"not UTF-8 text ({exc.reason})") from None
+    except csv.Error as exc:
+        raise InputError(path, f"not a CSV parameter table ({exc})") from None
+    for col in ("parameter", "unit", "value"):
+        if col not in header:
+            raise InputError(path, f"missing column {col!r} (header must start parameter,unit,value)", line=1)
+    for line, row in rows:
+        if len(row) != len(header):
+            raise InputError(path, f"{len(row)} fields, the header has {len(header)}", line=line)
+    return header, rows
+
+
+def _entry(path: Path, line: int, row: dict, seen: dict) -> tuple[str, float, float]:
+    """``(name, SI value, SI sigma or nan)`` of one row."""
+    name = row["parameter"].strip()
+    if not is_known(name):
+        raise InputError(path, f"unknown parameter {shown(name)}", line=line)
+    if name in seen:
+        raise InputError(path, f"parameter {name!r} given twice", line=line)
+    unit = row["unit"].strip()
+    if unit not in TO_SI:
+        raise InputError(path, f"unknown unit {shown(unit)} for {name}", line=line)
+    if dimension_of(unit) != dimension_of(unit_of(name)):
+        raise InputError(path, f"unit {unit!r} does not fit {name} (expected {unit_of(name)})", line=line)
+    try:
+        value = float(row["value"])
+    except ValueError:
+        raise InputError(path, f"value {shown(row['value'])} of {name} is not a number", line=line) from None
+    if not np.isfinite(value):
+        raise InputError(path, f"value of {name} is not finite", line=line)
+    text = row.get("sigma", "").strip()
+    try:
+        sigma = float(text) * TO_SI[unit] if text else np.nan
+    except ValueError:
+        raise InputError(path, f"sigma {shown(text)} of {name} is not a number", line=line) from None
+    if not (np.isnan(sigma) or (np.isfinite(sigma) and sigma >= 0)):
+        raise InputError(path, f"sigma of {name} must be a non-negative finite number", line=line)
+    return name, value * TO_SI[unit], sigma

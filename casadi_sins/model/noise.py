@@ -101,7 +101,7 @@ class SensorNoise:
 
     @classmethod
     def from_deviations(cls, dev, dt: float, pulse_gyro=None, pulse_accel=None) -> "SensorNoise":
-        """The noise a problem file simulates (:class:`problem.Deviations`); integer pulses of the given
+        """The noise a problem file simulates (:class:`data.problem.Deviations`); integer pulses of the given
         sizes (rad, m/s) add a uniform remainder (``pulse / sqrt(12)``)."""
         quantized = getattr(dev, "quantize", False) and pulse_gyro is not None
         return cls(gyro_arw=math.hypot(dev.gyro_noise_deg_h * DEG_PER_H * math.sqrt(dt), dev.gyro_arw_deg_rth * ARW_UNIT),

@@ -1,7 +1,7 @@
 """The one strapdown step on a static base, as a CasADi ``Function``.
 
 The navigation frame is ENU at the test site, fixed to the Earth; the base does not move, so the
-transport rate and Coriolis terms vanish (spec, section 2) and the n frame turns with the Earth rate
+transport rate and Coriolis terms vanish (the paper's experiment, section 2) and the n frame turns with the Earth rate
 only.  One step from sample ``k-1`` to ``k`` (quaternion ``q = q_b^n``, velocity ``v``)::
 
     phi_k   = dtheta_k + dtheta_{k-1} x dtheta_k / 12                 (coning)

@@ -2,7 +2,7 @@
 
 The residuals of the NLP (:mod:`noise.observations`) are the navigated velocity at observation times in static segments and
 the mean gyro rate of every static segment.  Sensor noise moves them through one linear model
-(the error dynamics of spec section 1 on a static base, ENU; the slow ``-w_ie x phi`` term kept to
+(the error dynamics of the method (docs/method.md) on a static base, ENU; the slow ``-w_ie x phi`` term kept to
 first order)::
 
     phi'  = -w_ie x phi - C (w_g + b_g)        attitude error

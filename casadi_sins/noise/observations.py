@@ -3,7 +3,7 @@
 The NLP's residuals are, per group in time order, the navigated velocity at observation steps in the
 static segments (ENU, m/s) and, per static segment, its mean gyro rate against the Earth rate seen
 in the navigated attitude (body, rad/s).  The noise model (:mod:`noise.kalman`) and the checks
-(:mod:`calibrate.diagnostics`) read the same table.
+(:mod:`calibrate.nlp.diagnostics`) read the same table.
 """
 
 from __future__ import annotations

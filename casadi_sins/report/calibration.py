@@ -27,6 +27,7 @@ from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
+from ..core.text import markdown_text
 from .plots import noise_plot, residual_plot
 from .rounding import rounded, sigma_in_value_unit
 from .tables import calibration_tables, markdown_table, natural_noise_frame
@@ -146,15 +147,15 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
 def report_markdown(data: dict) -> str:
     """The report as Markdown."""
     rec = data["recording"]
-    lines = [f"# Calibration report: {rec['name']} ({data['solver']})", "",
-             f"- unit: {data.get('unit_id') or '(no --unit-id given)'}",
+    lines = [f"# Calibration report: {markdown_text(rec['name'])} ({data['solver']})", "",
+             f"- unit: {markdown_text(data.get('unit_id') or '(no --unit-id given)')}",
              f"- software: {data['software']}, created {data['created']}",
              "- versions: " + ", ".join(f"{k} {v}" for k, v in data.get("versions", {}).items()),
-             f"- recording: {rec['source'] or '(in memory)'}, sha256 `{rec['sha256']}`",
+             f"- recording: {markdown_text(rec['source'] or '(in memory)')}, sha256 `{rec['sha256']}`",
              f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
              f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
     if data.get("command"):
-        lines.append(f"- command: `{data['command']}`")
+        lines.append(f"- command: {markdown_text(data['command'])}")
     status = "converged" if data["converged"] else "NOT converged"
     if "ipopt" in data:
         ip = data["ipopt"]
@@ -166,7 +167,7 @@ def report_markdown(data: dict) -> str:
                      f"{status}")
     lines.append(f"- wall time {data['wall_time_s']:.2f} s; sigma: {data['sigma_meaning']}")
     lines += ["", "## Warnings", ""]
-    lines += [f"- **{w}**" for w in data["warnings"]] or ["- none"]
+    lines += [f"- **{markdown_text(w)}**" for w in data["warnings"]] or ["- none"]
     lines += ["", "## Parameters", ""]
     frame = pd.DataFrame(data["parameters"])
     cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]

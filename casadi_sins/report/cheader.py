@@ -21,6 +21,7 @@ import re
 
 import numpy as np
 
+from ..core.text import code_comment
 from ..core.version import __version__
 from ..model.output import compensation_matrices
 from ..model.parameters import ParameterSet
@@ -40,7 +41,7 @@ def _c_string(text: str) -> str:
 
 
 def _comment(text: str) -> str:
-    return "".join(c if 32 <= ord(c) < 127 else "?" for c in str(text)).replace("*/", "* /")
+    return "".join(c if 32 <= ord(c) < 127 else "?" for c in code_comment(text))
 
 
 def _matrix(name: str, m: np.ndarray) -> str:

@@ -29,6 +29,7 @@ import json
 
 import numpy as np
 
+from ..core.text import code_comment
 from ..core.version import __version__
 from ..model.extras import psins_fields
 from ..model.output import sensor_matrices
@@ -120,7 +121,7 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
     lines = [f"% PSINS clbt struct from casadi-sins {__version__}",
              f"% wm = {p_g!r} * dN_g (rad), vm = {p_a!r} * dN_a (m/s); then wm' = Kg*wm - eb*ts, "
              "vm' = Ka*vm - db*ts"]
-    lines += [f"% {k}: {v}" for k, v in (metadata or {}).items()]
+    lines += [f"% {code_comment(k)}: {code_comment(v)}" for k, v in (metadata or {}).items()]
     lines += [f"clbt.Kg = {mat(k_g_inv @ np.diag(s_g.ravel()) / p_g)};",
               f"clbt.eb = {mat((k_g_inv @ b_g.ravel())[:, None])};",
               f"clbt.Ka = {mat(k_a_inv @ np.diag(s_a.ravel()) / p_a)};",

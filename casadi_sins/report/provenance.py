@@ -17,7 +17,12 @@ import json
 from pathlib import Path
 
 from ..core.errors import InputError
+from ..core.inputs import check_input_file
+from ..core.text import one_line
 from .calibration import companion_paths
+
+#: A table or a report larger than this is not one (they are kilobytes).
+MAX_REPORT_BYTES = 50_000_000
 
 
 @dataclasses.dataclass
@@ -82,6 +87,7 @@ def read_provenance(table_path: str | Path) -> Provenance:
         When the table cannot be read, or its companion report exists but is not a calibration report.
     """
     table = Path(table_path)
+    check_input_file(table, "parameter table", max_bytes=MAX_REPORT_BYTES)
     try:
         table_hash = file_sha256(table)
         mtime = table.stat().st_mtime
@@ -90,19 +96,21 @@ def read_provenance(table_path: str | Path) -> Provenance:
     except IsADirectoryError:
         raise InputError(table, "is a folder, not a parameter table") from None
     report = companion_paths(table)[0]
-    if not report.exists():
+    if not (report.exists() or report.is_symlink()):
         date = datetime.datetime.fromtimestamp(mtime, datetime.timezone.utc)
         return Provenance(table, table_hash, date)
+    check_input_file(report, "calibration report", max_bytes=MAX_REPORT_BYTES)
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(report, f"companion report of {table.name} cannot be read ({exc})") from None
+    except (OSError, UnicodeDecodeError, RecursionError, json.JSONDecodeError) as exc:
+        raise InputError(report, f"companion report of {one_line(table.name)} cannot be read "
+                         f"({one_line(exc)})") from None
     if not isinstance(data, dict) or not str(data.get("format", "")).startswith("casadi-sins-report/"):
         raise InputError(report, "not a casadi-sins calibration report (format casadi-sins-report/1)")
     try:
         date = datetime.datetime.fromisoformat(str(data.get("created")))
     except ValueError:
-        raise InputError(report, f"'created' {data.get('created')!r} is not an ISO date") from None
+        raise InputError(report, f"'created' {one_line(repr(data.get('created')), 60)} is not an ISO date") from None
     if date.tzinfo is None:
         date = date.replace(tzinfo=datetime.timezone.utc)
     rec = data.get("recording") if isinstance(data.get("recording"), dict) else {}
@@ -113,4 +121,4 @@ def read_provenance(table_path: str | Path) -> Provenance:
 
 
 def _text(value) -> str | None:
-    return None if value is None else str(value)
+    return None if value is None else one_line(value)

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.files import write_files
+from ..core.text import markdown_text, one_line
 from ..core.units import UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
@@ -20,7 +21,7 @@ from ..nav.navigation import GroupNavigation, static_velocities
 def recording_summary(rec: Recording) -> str:
     """A human-readable account of a recording's description and data."""
     lines = [
-        f"recording {rec.name} ({rec.label})",
+        f"recording {one_line(rec.name)} ({one_line(rec.label)})",
         f"  site: latitude {math.degrees(rec.site.latitude):.6g} deg, height {rec.site.height:g} m, "
         f"gravity {rec.site.g:.9g} m/s^2 ({'given' if rec.site.gravity is not None else 'WGS-84 normal gravity'})",
         f"  data: {len(rec.time)} samples at {rec.rate_hz:g} Hz, {rec.time[0] - rec.dt:g}-{rec.time[-1]:g} s",
@@ -50,8 +51,8 @@ def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
     programs) and ``stem.md`` (rounded with ``float_format``: it is read by people), the latter from
     ``display`` when given (e.g. numbers as text rounded from their sigma, :mod:`report.rounding`)."""
     stem = Path(stem)
-    md = (f"# {title}\n\n" if title else "") + markdown_table(frame if display is None else display,
-                                                               float_format) + "\n"
+    md = (f"# {markdown_text(title)}\n\n" if title else "") + markdown_table(frame if display is None else display,
+                                                                              float_format) + "\n"
     return {stem.with_name(stem.name + ".csv"): frame.to_csv(index=False).encode(),
             stem.with_name(stem.name + ".md"): md.encode()}
 
@@ -67,9 +68,9 @@ def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:
     def fmt(x):
         if isinstance(x, (float, np.floating)):
             return "" if math.isnan(x) else float_format % x
-        return str(x)
+        return markdown_text(x)
 
-    header = "| " + " | ".join(map(str, frame.columns)) + " |"
+    header = "| " + " | ".join(markdown_text(c) for c in frame.columns) + " |"
     rule = "| " + " | ".join("---" for _ in frame.columns) + " |"
     body = ["| " + " | ".join(fmt(v) for v in row) + " |" for row in frame.itertuples(index=False)]
     return "\n".join([header, rule, *body])

@@ -59,7 +59,7 @@ class MotionPiece:
 
 
 def plan_motion(problem: Problem, rng: np.random.Generator):
-    """Draw the deviations and lay out the trajectory as :class:`Motion` pieces."""
+    """Draw the deviations and lay out the trajectory as :class:`MotionPiece` pieces."""
     dev = problem.deviations
     pieces: list[MotionPiece] = []
     starts: dict[int, np.ndarray] = {}

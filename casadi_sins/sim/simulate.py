@@ -20,10 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from ..core.units import ARCSEC, ARW_UNIT, DEG_PER_H, UG
-from ..data.description import write_recording
+from ..core.files import write_files
+from ..data.description import recording_files
 from ..data.problem import Problem
 from ..data.recording import Recording
-from ..data.tables import write_table
+from ..data.tables import table_text
 from ..model.extras import sensed_extras
 from ..model.output import output_model
 from ..model.parameters import ParameterSet
@@ -173,8 +174,10 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
 
 
 def write_simulation(sim: Simulation, out_dir: str | Path) -> Path:
-    """Write ``NAME.toml``, ``NAME.csv`` and ``NAME.truth.csv`` into ``out_dir``; returns the TOML path."""
+    """Write ``NAME.toml``, ``NAME.csv`` and ``NAME.truth.csv`` into ``out_dir`` together; returns the TOML path."""
     out_dir = Path(out_dir)
-    toml_path = write_recording(sim.recording, out_dir / f"{sim.recording.file_stem}.toml")
-    write_table(out_dir / f"{sim.recording.file_stem}.truth.csv", sim.truth, as_truth=True)
+    toml_path = out_dir / f"{sim.recording.file_stem}.toml"
+    files = recording_files(sim.recording, toml_path)
+    files[out_dir / f"{sim.recording.file_stem}.truth.csv"] = table_text(sim.truth, as_truth=True).encode()
+    write_files(files)
     return toml_path

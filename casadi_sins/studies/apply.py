@@ -25,6 +25,7 @@ import pandas as pd
 
 from ..core.earth import EARTH_RATE
 from ..core.files import safe_stem
+from ..core.text import code_comment
 from ..core.units import DEG_PER_H, UG
 from ..data.description import description_toml
 from ..data.recording import Recording
@@ -104,7 +105,7 @@ def apply_files(applied: Applied, out_dir: str | Path, table_label: str, table_s
     rec = applied.recording
     stem = safe_stem(rec.name)
     csv_path = out / f"{stem}.csv"
-    header = (f"# compensated with {table_label}" + (f" (sha256 {table_sha256})" if table_sha256 else "") + "\n"
+    header = (f"# compensated with {code_comment(table_label)}" + (f" (sha256 {table_sha256})" if table_sha256 else "") + "\n"
               "# gyro_* are increments in rad and accel_* in m/s per sample (pulse size 1): this recording\n"
               "# calibrates to the identity table when the table was right\n")
     files = {out / f"{stem}.toml": (header + description_toml(rec, csv_path.name)).encode(),

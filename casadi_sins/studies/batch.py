@@ -1,8 +1,8 @@
 """A production batch: many units' recordings calibrated, a fleet table, the spread across units.
 
 Every recording is one unit (its unit id is the recording's ``name``).  Each is calibrated on its own
-(in local worker processes, or on a Dask cluster: a scheduler address or ``"local"``, as
-:mod:`studies.montecarlo`); its table and report are written under ``OUT/units/`` as soon as it is
+(in local worker processes, or on a Dask cluster: a scheduler address or ``"local"``, through
+:func:`studies.parallel.run_all` as the Monte Carlo); its table and report are written under ``OUT/units/`` as soon as it is
 done, so that an interrupted batch resumes: a unit whose table and report exist and whose report
 names the SHA-256 of the recording as it is now is not calibrated again.  A unit that fails (an
 unreadable recording, a calibration that does not converge) is reported in the fleet table with its
@@ -19,6 +19,7 @@ of that spread and the median sigma of one unit, flagged as outliers.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -31,7 +32,7 @@ import pandas as pd
 
 from ..calibrate import calibrate
 from ..core.files import safe_stem, write_files
-from ..core.threads import single_threaded
+from ..core.text import one_line
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
@@ -39,6 +40,7 @@ from ..data.tables import table_text
 from ..model.registry import NAMES, natural_scale_of, natural_unit_of, relative_mask
 from ..report.calibration import companion_paths, recording_hash, report_files
 from ..report.tables import frame_files
+from .parallel import run_all
 
 #: Outlier threshold in robust spreads (see the module docstring).
 OUTLIER_THRESHOLD = 5.0
@@ -71,7 +73,7 @@ def finished(rec_path, out_dir) -> dict | None:
         return None
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
     digest = (data.get("recording") or {}).get("sha256") if isinstance(data, dict) else None
     return data if digest and digest == file_hash(rec_path) else None
@@ -101,7 +103,7 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         data = json.loads(files[companion_paths(table)[0]])
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
-        message = " ".join(str(exc).split()) or type(exc).__name__
+        message = one_line(exc, 500) or type(exc).__name__
         if not hasattr(exc, "path") and type(exc).__name__ not in ("CalibrationError",):
             message = f"{type(exc).__name__}: {message}"
         return {"row": {"unit_id": Path(rec_path).stem, "recording": str(rec_path), "status": "failed",
@@ -135,45 +137,11 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
         if progress:
             progress(done, len(paths))
 
-    with single_threaded():
-        _dispatch(pending, str(out_dir), options, workers, scheduler, collect)
+    task = functools.partial(calibrate_unit, out_dir=str(out_dir), options=options)
+    workers = min(workers or os.cpu_count() or 1, max(len(pending), 1)) if not scheduler else workers
+    for result in run_all(task, pending, workers, scheduler) if pending else ():
+        collect(result)
     return pd.DataFrame([rows[p] for p in paths])
-
-
-def _dispatch(pending, out_dir, options, workers, scheduler, collect) -> None:
-    if not pending:
-        return
-    if scheduler:
-        try:
-            from dask.distributed import Client, LocalCluster, as_completed
-        except ImportError:
-            raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
-                               "pip install 'casadi-sins[cluster]'") from None
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                               dashboard_address=None) if scheduler == "local" else None
-        try:
-            with Client(cluster if cluster is not None else scheduler) as client:
-                futures = [client.submit(calibrate_unit, p, out_dir, options, pure=False) for p in pending]
-                for future in as_completed(futures):
-                    collect(future.result())
-        finally:
-            if cluster is not None:
-                cluster.close()
-        return
-    workers = min(workers or os.cpu_count() or 1, len(pending))
-    if workers == 1:
-        for path in pending:
-            collect(calibrate_unit(path, out_dir, options))
-        return
-    import functools
-    import multiprocessing
-
-    from .montecarlo import _ignore_interrupts
-
-    with multiprocessing.get_context("spawn").Pool(workers, initializer=_ignore_interrupts) as pool:
-        for result in pool.imap_unordered(functools.partial(calibrate_unit, out_dir=out_dir, options=options),
-                                          pending):
-            collect(result)
 
 
 def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> pd.DataFrame:

@@ -11,7 +11,7 @@ states::
 (the calibration's error model, :mod:`nav.errormodel`, extended by position and Coriolis).  The state
 starts from the alignment (eq. 14): its attitude error is the linearised alignment of the parameter
 errors plus the alignment's own noise.  Being linear, the covariance splits exactly into the
-contributions of independent sources (Guan et al., spec section 4): each parameter group's residual
+contributions of independent sources (Guan et al. 2023): each parameter group's residual
 error (from the calibration covariance; correlations between groups are left out of the split but kept
 in the total), the alignment noise, and the sensor noise during navigation.
 """

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import os
+import functools
 from typing import Callable, Sequence
 
 import numpy as np
@@ -10,7 +10,6 @@ import pandas as pd
 
 from ..calibrate import calibrate
 from ..calibrate.result import CalibrationError
-from ..core.threads import single_threaded
 from ..core.units import DEG_PER_H, UG
 from ..data.problem import Problem
 from ..model.noise import SensorNoise
@@ -18,6 +17,7 @@ from ..model.parameters import natural_errors
 from ..model.registry import CORE_SPANS, NAMES, group_of
 from ..report.plots import pyplot, save_figure
 from ..sim import simulate
+from .parallel import run_all
 
 #: What the paper's noise allows (1 sigma, an efficient estimator's bound): (low, high) per group.
 NOISE_FLOOR = {
@@ -77,7 +77,7 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
 def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",), workers: int | None = None,
         progress: Callable[[int, int], None] | None = None, scheduler: str | None = None,
         use_datasheet: bool = True, model: str = "21") -> pd.DataFrame:
-    """Run seeds in parallel; rows of :func:`run_seed`.
+    """Run seeds in parallel (:func:`studies.parallel.run_all`); rows of :func:`run_seed`.
 
     Parameters
     ----------
@@ -87,56 +87,15 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
         A Dask distributed scheduler address (``tcp://host:8786``), or ``"local"`` for a Dask
         cluster on this machine: the runs are submitted there instead (needs ``dask[distributed]``).
     """
+    task = functools.partial(_seed_rows, problem, tuple(solvers), use_datasheet, model)
     rows: list[dict] = []
-    with single_threaded():
-        return _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet, model)
-
-
-def _run(problem, seeds, solvers, workers, progress, scheduler, rows, use_datasheet, model) -> pd.DataFrame:
-    if scheduler:
-        try:
-            from dask.distributed import Client, LocalCluster
-            from dask.distributed import as_completed as dask_completed
-        except ImportError:
-            raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
-                               "pip install 'casadi-sins[cluster]'") from None
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True) if scheduler == "local" else None
-        with Client(cluster if cluster is not None else scheduler) as client:
-            futures = [client.submit(run_seed, problem, seed, tuple(solvers), use_datasheet, model, pure=False)
-                       for seed in seeds]
-            for k, fut in enumerate(dask_completed(futures), 1):
-                rows += fut.result()
-                if progress:
-                    progress(k, len(seeds))
-        if cluster is not None:
-            cluster.close()
-        return pd.DataFrame(rows)
-    workers = workers or os.cpu_count() or 1
-    if workers == 1:
-        for k, seed in enumerate(seeds, 1):
-            rows += run_seed(problem, seed, solvers, use_datasheet, model)
-            if progress:
-                progress(k, len(seeds))
-        return pd.DataFrame(rows)
-    import functools
-    import multiprocessing
-
-    # spawned workers that ignore Ctrl-C: the parent alone handles it, terminates them and reports
-    with multiprocessing.get_context("spawn").Pool(workers, initializer=_ignore_interrupts) as pool:
-        task = functools.partial(run_seed, problem, solvers=tuple(solvers), use_datasheet=use_datasheet, model=model)
-        for k, result in enumerate(pool.imap_unordered(task, seeds), 1):
-            rows += result
-            if progress:
-                progress(k, len(seeds))
+    for result in run_all(task, list(seeds), workers, scheduler, progress):
+        rows += result
     return pd.DataFrame(rows)
 
 
-def _ignore_interrupts():
-    """Worker processes leave Ctrl-C to the parent."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _seed_rows(problem, solvers, use_datasheet, model, seed):
+    return run_seed(problem, seed, solvers, use_datasheet, model)
 
 
 def with_prediction(summary_frame: pd.DataFrame, predicted_sigma: np.ndarray) -> pd.DataFrame:

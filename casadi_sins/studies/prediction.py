@@ -4,7 +4,7 @@ For a problem file the experiment is simulated without noise at its truth; for a
 schedule and data are used around the rough initial values.  The NLP's residual Jacobian there,
 weighted with the stated noise (accelerometer and gyro white noise per sample, and the white velocity
 noise of integer pulses), gives the covariance ``(J^T W J)^-1`` that an efficient estimate reaches:
-the Cramer-Rao bound of this noise model.  No Monte Carlo is needed (Guan et al., spec section 4).
+the Cramer-Rao bound of this noise model.  No Monte Carlo is needed (Guan et al. 2023).
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ def predict(rec: Recording, nominal, noise: SensorNoise, name: str | None = None
     """Predicted covariance of the parameters for a recording's schedule and a sensor noise model.
 
     The NLP's residual Jacobian at ``nominal``, whitened by the Kalman filter of the noise model
-    (:mod:`kalman`), gives ``(J_w^T J_w)^-1``: the Cramer-Rao bound of that model.  ``model`` adds
+    (:mod:`noise.kalman`), gives ``(J_w^T J_w)^-1``: the Cramer-Rao bound of that model.  ``model`` adds
     the extra groups (:func:`calibrate.nlp.selection.model_groups`): their sigma shows what a schedule can see of lever arms,
     a time offset and quadratic scale.
     """

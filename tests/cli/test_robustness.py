@@ -39,7 +39,7 @@ def test_folders_in_place_of_files_are_named(recording, tmp_path, capsys):
     one_line_error(capsys, "is a folder")
     edit(recording, 'data = "r.csv"', 'data = "."')
     assert main(["validate", str(recording)]) == 2
-    one_line_error(capsys, "is a folder", "'data' must name the CSV")
+    one_line_error(capsys, "is a folder", "'data' must name")
     edit(recording, 'data = "."', 'data = ""')
     assert main(["validate", str(recording)]) == 2
     one_line_error(capsys, "'data' is empty")

@@ -108,7 +108,7 @@ TOML_CASES = {
     "kind": ('kind = "rotation"', 'kind = "spin"', r"segment 2: kind must be 'static' or 'rotation'"),
     "format": ('format = "sins-recording/1"', 'format = "sins-recording/9"', r"format must be 'sins-recording/1'"),
     "latitude": ("latitude_deg = 37.5", "latitude_deg = 137.5", r"latitude_deg 137.5 is outside"),
-    "data file": ('data = "r.csv"', 'data = "missing.csv"', r"missing\.csv: data file not found"),
+    "data file": ('data = "r.csv"', 'data = "missing.csv"', r"missing\.csv: no such data file"),
 }
 
 

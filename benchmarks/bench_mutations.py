@@ -1,0 +1,143 @@
+"""Mutation run over the recording reader and the command line (issue 17's bar).
+
+Run: ``python benchmarks/bench_mutations.py [--seeds 150] [--calibrate-every 25] [--out results]``.
+
+Each case mutates a valid recording (the paper's schedule with short segments): one of the CSV
+mutations of ``tests/fuzz/mutations.py`` (a comma inserted into a number, a field appended, lines
+deleted, duplicated or swapped, characters replaced, columns renamed, reordered or added, values
+scaled, blank lines, CRLF) or one of its TOML edits (missing keys, bad spellings, code in the name,
+``../`` names, deep nesting, a device as data).  ``casadi-sins validate`` runs on it in this process
+with a 20 s alarm.  Counted:
+
+* traceback: an exception escaping the command, or a message that is not one line;
+* silent wrong table: a recording accepted whose numbers differ from what a strict independent
+  reader (Python's ``csv``) finds in the text, or accepted although that reader finds no valid table;
+* hang: the alarm;
+* partial output: on every ``--calibrate-every``-th accepted case ``casadi-sins calibrate`` writes a
+  table and its report into a fresh folder; afterwards either all of them exist or none.
+
+Writes ``results/mutations.{csv,md}`` (one row per mutation class) and prints the totals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib.util
+import io
+import signal
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from casadi_sins.cli import main
+from casadi_sins.data.description import read_recording, write_recording
+from casadi_sins.data.problem import load_problem
+from casadi_sins.report.tables import write_frame
+from casadi_sins.sim import simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("mutations", ROOT / "tests" / "fuzz" / "mutations.py")
+mutations = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(mutations)
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise Hang
+
+
+def run_case(folder: Path, toml: str, csv: str, calibrate: bool) -> dict:
+    """One mutated recording through ``validate`` (and ``calibrate``): what happened."""
+    (folder / "r.toml").write_text(toml)
+    (folder / "r.csv").write_text(csv)
+    err = io.StringIO()
+    outcome = {"traceback": 0, "silent_wrong": 0, "hang": 0, "partial": 0, "accepted": 0, "refused": 0}
+    signal.alarm(20)
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            status = main(["validate", str(folder / "r.toml")])
+    except Hang:
+        outcome["hang"] = 1
+        return outcome
+    except BaseException:  # noqa: BLE001 (anything escaping the command is a traceback)
+        outcome["traceback"] = 1
+        return outcome
+    finally:
+        signal.alarm(0)
+    text = err.getvalue().strip()
+    if status != 0:
+        outcome["refused"] = 1
+        if status != 2 or len(text.splitlines()) != 1 or "internal error" in text:
+            outcome["traceback"] = 1
+        return outcome
+    outcome["accepted"] = 1
+    expected = mutations.oracle(csv)
+    rec = read_recording(folder / "r.toml")
+    got = np.column_stack([rec.time, rec.gyro, rec.accel])
+    if expected is None or expected.shape != got.shape or not np.array_equal(expected, got):
+        outcome["silent_wrong"] = 1
+    if calibrate:
+        out = folder / "out"
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+            main(["calibrate", str(folder / "r.toml"), "--out", str(out / "p.csv")])
+        present = [(out / name).exists() for name in ("p.csv", "p.report.json", "p.report.md")]
+        stray = list(out.glob(".*tmp")) if out.exists() else []
+        if (any(present) and not all(present)) or stray:
+            outcome["partial"] = 1
+    return outcome
+
+
+def main_benchmark():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seeds", type=int, default=150, help="seeds per CSV mutation class (default 150)")
+    parser.add_argument("--toml-seeds", type=int, default=25, help="seeds per TOML edit (default 25)")
+    parser.add_argument("--calibrate-every", type=int, default=25, help="calibrate every n-th accepted case")
+    parser.add_argument("--out", default=str(ROOT / "results"), help="folder of the results tables")
+    args = parser.parse_args()
+    problem = load_problem()
+    problem = problem.__class__(**{**problem.__dict__, "name": "short",
+                                   "timing": problem.timing.__class__(static_s=8.0, rotation_s=4.0)})
+    signal.signal(signal.SIGALRM, _alarm)
+    rows, accepted = [], 0
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        base = write_recording(simulate(problem, seed=6).recording, Path(tmp) / "orig" / "r.toml")
+        toml, csv = base.read_text(), base.with_suffix(".csv").read_text()
+        cases = [("csv " + kind, seed) for kind in sorted(mutations.CSV_MUTATIONS) for seed in range(args.seeds)]
+        cases += [(f"toml edit {i}", seed) for i in range(len(mutations.TOML_EDITS)) for seed in range(args.toml_seeds)]
+        for n, (kind, seed) in enumerate(cases):
+            folder = Path(tmp) / f"case{n}"
+            folder.mkdir()
+            if kind.startswith("csv "):
+                case_toml, case_csv = toml, mutations.mutate_csv(csv, kind[4:], seed)
+            else:
+                case_toml, case_csv = mutations.mutate_toml(toml, int(kind.split()[-1]), seed), csv
+            calibrate = accepted % args.calibrate_every == 0
+            outcome = run_case(folder, case_toml, case_csv, calibrate)
+            accepted += outcome["accepted"]
+            rows.append({"class": kind, **outcome})
+            if n % 250 == 0:
+                print(f"{n}/{len(cases)} cases, {time.perf_counter() - started:.0f} s", flush=True)
+    frame = pd.DataFrame(rows)
+    table = frame.groupby("class").sum(numeric_only=True).reset_index()
+    table.insert(1, "cases", frame.groupby("class").size().to_numpy())
+    totals = table.drop(columns="class").sum()
+    print(table.to_string(index=False))
+    print(f"{len(frame)} cases in {time.perf_counter() - started:.0f} s: {totals['traceback']} tracebacks, "
+          f"{totals['silent_wrong']} silent wrong tables, {totals['partial']} partial outputs, {totals['hang']} hangs; "
+          f"{totals['accepted']} accepted, {totals['refused']} refused")
+    write_frame(table, Path(args.out) / "mutations", f"Mutation run: {len(frame)} mutated recordings through "
+                f"validate (and calibrate on every {args.calibrate_every}-th accepted one); counts per class")
+    return 0 if totals[["traceback", "silent_wrong", "partial", "hang"]].sum() == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main_benchmark())

@@ -77,9 +77,6 @@ def cmd_batch(args) -> int:
     from tqdm import tqdm
 
     options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
-    for path in args.recordings:
-        if not Path(path).is_file():
-            raise CliError(f"{path}: no such recording")
     t0 = time.perf_counter()
     with tqdm(total=len(args.recordings), desc="batch", unit="unit") as bar:
         fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask,

@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from ..calibrate import calibrate
+from ..core.errors import InputError
 from ..core.files import safe_stem, write_files
 from ..core.text import one_line
 from ..data.datasheet import read_datasheet
@@ -114,8 +115,21 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
               scheduler: str | None = None, progress: Callable[[int, int], None] | None = None,
               resume: bool = True) -> pd.DataFrame:
     """Calibrate every recording (resuming: finished units are read back, not recomputed); each unit's
-    files are written as it finishes.  Returns the fleet table in the order of ``recordings``."""
+    files are written as it finishes.  Returns the fleet table in the order of ``recordings``.
+
+    Raises
+    ------
+    InputError
+        When two recordings have the same file name (their units' files would be one).
+    """
     paths = [str(Path(p).resolve()) for p in recordings]
+    stems: dict[Path, str] = {}
+    for path in paths:
+        table = unit_table_path(out_dir, path)
+        if table in stems:
+            raise InputError(path, f"its unit's table would be {table.name}, as that of {stems[table]}: give the "
+                             "recordings of a batch different file names")
+        stems[table] = path
     rows: dict[str, dict] = {}
     pending = []
     for path in paths:

@@ -61,3 +61,16 @@ def test_batch_on_a_local_dask_cluster(tmp_path, short_problem):
     assert main(["batch", *map(str, paths), "--out", str(tmp_path / "out"), "--dask", "local", "--workers", "2"]) == 0
     table = pd.read_csv(tmp_path / "out" / "fleet.csv")
     assert list(table["unit_id"]) == ["D0", "D1", "D2"] and (table["status"] == "ok").all()
+
+
+def test_batch_reports_a_missing_recording_as_a_failed_unit_and_refuses_two_of_one_name(tmp_path, short_problem,
+                                                                                        capsys):
+    good = write_simulation(simulate(short_problem, seed=1, name="E1"), tmp_path / "a")
+    assert main(["batch", str(good), str(tmp_path / "missing.toml"), "--out", str(tmp_path / "out"),
+                 "--workers", "1"]) == 0
+    table = pd.read_csv(tmp_path / "out" / "fleet.csv", keep_default_na=False).set_index("unit_id")
+    assert table.loc["E1", "status"] == "ok" and table.loc["missing", "status"] == "failed"
+    assert "missing.toml" in table.loc["missing", "message"]
+    twin = write_simulation(simulate(short_problem, seed=2, name="E1"), tmp_path / "b")
+    assert main(["batch", str(good), str(twin), "--out", str(tmp_path / "out2")]) == 2
+    assert "different file names" in capsys.readouterr().err

@@ -86,7 +86,7 @@ def cmd_batch(args) -> int:
     write_files(batch_files(fleet, spread, args.out))
     print(fleet[["unit_id", "status", "warnings", "outliers", "message"]].to_string(index=False))
     failed = int((fleet["status"] == "failed").sum())
-    resumed = int(fleet.get("resumed", []).sum()) if "resumed" in fleet else 0
+    resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
     print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed, {resumed} already done "
           f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
     return 0

@@ -30,6 +30,7 @@ from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import GROUPS, natural_unit_of
 from ..report.plots import figure_bytes, pyplot
 from ..report.provenance import Provenance, read_provenance
+from ..report.rounding import rounded
 from ..report.tables import frame_files
 
 YEAR_S = 365.25 * 86400.0
@@ -197,9 +198,12 @@ def history_files(cals: list[Calibration], out_dir, sheet: ToleranceSheet | None
     title = (f"{unit}: {len(cals)} calibrations {cals[0].label} to {cals[-1].label}; changes in natural units "
              f"(scale factors ppm of the value), z against the combined sigma")
     files = frame_files(calibrations_frame(cals), out / "history-calibrations", f"{unit}: calibrations by date")
-    files.update(frame_files(changes, out / "history-changes", title, "%.4g"))
-    md_notes = "".join(f"\n- note: {n}" for n in notes or [])
-    files.update(frame_files(summary, out / "history-summary", title + md_notes, "%.4g"))
+    files.update(frame_files(changes, out / "history-changes", title, "%.3g",
+                             rounded(changes, {"change": "combined_sigma"}, signed=True)))
+    md_notes = "".join(f"; note: {n}" for n in notes or [])
+    files.update(frame_files(summary, out / "history-summary", title + md_notes, "%.3g",
+                             rounded(summary, {"change_first_to_last": "combined_sigma",
+                                               "drift_per_year": "drift_sigma_per_year"}, signed=True)))
     names = common_names(cals)
     for key, group in GROUPS.items():
         if any(n in names for n in group.names):

@@ -4,8 +4,8 @@ Run: ``python benchmarks/bench_batch.py [--units 12] [--static-s 100]``.  Simula
 schedule are written to a temporary folder and calibrated by :func:`studies.batch.run_batch` through
 a Dask cluster started beforehand (its scheduler address is passed, as for a remote cluster), so the
 timing is the batch itself, not the cluster's start.  Target: two workers at least 1.6x faster than
-one on this 2-core machine.  The load of the machine before each run is printed: other work on the
-cores lowers the ratio.
+one on this 2-core machine.  The load of the machine before each run and the cores the workers got
+(their CPU seconds over the wall time) are printed: other work on the cores lowers the ratio.
 """
 
 from __future__ import annotations
@@ -22,17 +22,29 @@ from casadi_sins.sim import simulate, write_simulation
 from casadi_sins.studies.batch import run_batch
 
 
-def timed_batch(paths, out: Path, workers: int) -> float:
-    """Seconds for one batch of ``paths`` on a fresh local Dask cluster of ``workers`` processes."""
-    from dask.distributed import LocalCluster
+def _cpu_seconds() -> float:
+    import resource
 
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def timed_batch(paths, out: Path, workers: int) -> tuple[float, float]:
+    """Wall seconds for one batch of ``paths`` on a fresh local Dask cluster of ``workers`` processes, and
+    the CPU seconds its workers used (their ratio shows how much of the cores the batch got)."""
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        before = sum(client.run(_cpu_seconds).values())
         print(f"load average before {workers} worker(s): {os.getloadavg()[0]:.2f}")
         t0 = time.perf_counter()
         fleet = run_batch(paths, out, scheduler=cluster.scheduler_address, resume=False)
         elapsed = time.perf_counter() - t0
+        cpu = sum(client.run(_cpu_seconds).values()) - before
     assert (fleet["status"] != "failed").all(), fleet[["unit_id", "message"]]
-    return elapsed
+    print(f"{workers} worker(s): {elapsed:.1f} s wall, {cpu:.1f} s CPU in the workers ({cpu / elapsed:.2f} cores used)")
+    return elapsed, cpu
 
 
 def main():
@@ -48,8 +60,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         paths = [write_simulation(simulate(problem, seed=k, name=f"U{k:03d}"), root / "rec") for k in range(args.units)]
-        one = timed_batch(paths, root / "one", 1)
-        two = timed_batch(paths, root / "two", 2)
+        one, _ = timed_batch(paths, root / "one", 1)
+        two, _ = timed_batch(paths, root / "two", 2)
     print(f"{args.units} units ({args.static_s:g} s statics): 1 Dask worker {one:.1f} s, 2 workers {two:.1f} s, "
           f"speed-up {one / two:.2f} (target >= 1.6)")
 

@@ -14,6 +14,7 @@ from ..calibrate import calibrate
 from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
 from ..core.earth import Site
+from ..core.text import one_line
 from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
@@ -122,7 +123,8 @@ def cmd_export(args) -> int:
     params = read_table(args.table)
     origin = read_provenance(args.table)  # the companion report's unit id, date and recording hash
     if args.unit_id and origin.unit_id and args.unit_id != origin.unit_id:
-        raise CliError(f"{args.table}: --unit-id {args.unit_id} but the table's report says unit {origin.unit_id}")
+        raise CliError(f"{one_line(args.table)}: --unit-id {one_line(args.unit_id, 60)} but the table's report says "
+                       f"unit {one_line(origin.unit_id, 60)}")
     metadata = {**origin.metadata(), **({"unit_id": args.unit_id} if args.unit_id else {})}
     atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
     print(f"wrote {args.out} ({args.format})" + ("" if origin.from_report else
@@ -151,8 +153,8 @@ def cmd_calibrate(args) -> int:
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id))
     files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "table": str(args.out), "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(),
-        "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
+        "unit_id": args.unit_id, "table": str(args.out),
+        "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
         "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))

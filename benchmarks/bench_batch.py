@@ -36,14 +36,16 @@ def timed_batch(paths, out: Path, workers: int) -> tuple[float, float]:
 
     with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
             Client(cluster) as client:
-        before = sum(client.run(_cpu_seconds).values())
+        before = client.run(_cpu_seconds)
         print(f"load average before {workers} worker(s): {os.getloadavg()[0]:.2f}")
         t0 = time.perf_counter()
         fleet = run_batch(paths, out, scheduler=cluster.scheduler_address, resume=False)
         elapsed = time.perf_counter() - t0
-        cpu = sum(client.run(_cpu_seconds).values()) - before
+        per_worker = [after - before[w] for w, after in client.run(_cpu_seconds).items()]
+    cpu = sum(per_worker)
     assert (fleet["status"] != "failed").all(), fleet[["unit_id", "message"]]
-    print(f"{workers} worker(s): {elapsed:.1f} s wall, {cpu:.1f} s CPU in the workers ({cpu / elapsed:.2f} cores used)")
+    print(f"{workers} worker(s): {elapsed:.1f} s wall, {cpu:.1f} s CPU in the workers ({cpu / elapsed:.2f} cores used; "
+          f"per worker {', '.join(f'{c:.1f}' for c in per_worker)} s)")
     return elapsed, cpu
 
 

@@ -19,3 +19,4 @@ python benchmarks/sweep_start_attitude.py --seeds 8 --solvers nlp ils --out "$ou
 python benchmarks/bench_budget.py --runs 24 --out "$out"
 python benchmarks/bench_navigation.py | tee "$out/navigation-timing.txt"
 python benchmarks/bench_montecarlo.py --runs 100 | tee "$out/montecarlo-throughput.txt"
+python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 # segment edges next to slow handling

@@ -36,10 +36,11 @@ SMOOTH_S = 0.05
 #: a rest alone reaches a few.
 MIN_CONTRAST = 30.0
 #: An attitude jump inside a rest: the mean specific force turns by more than this (deg), or the mean gyro
-#: rate changes by more than this share of its magnitude at this many standard errors.
+#: rate changes by more than this share of its magnitude; either by this many times the typical step
+#: between consecutive 1 s means.
 JUMP_FORCE_DEG = 5.0
 JUMP_RATE_SHARE = 0.3
-JUMP_RATE_SIGMAS = 20.0
+JUMP_SIGMAS = 20.0
 #: Seconds of rest the change-point fit starts with (more when the fit puts the onset near its start),
 #: and seconds it reaches past the point where the rate magnitude is surely above rest.
 REST_WINDOW_S = 1.0
@@ -273,44 +274,52 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(edges[0::2], edges[1::2]))
 
 
-def jumps(gyro: np.ndarray, accel: np.ndarray, first: int, stop: int, shortest: int) -> list[int]:
+def jumps(gyro: np.ndarray, accel: np.ndarray, first: int, stop: int, block: int, longest: int) -> list[int]:
     """Samples in ``[first, stop)`` where the attitude jumps with no motion (a new rest starts there), by
-    binary segmentation of the mean specific force (its direction) and the mean gyro rate; no piece is
-    shorter than ``shortest`` samples (the block the gyro rate's scatter is measured over, 1 s)."""
-    if stop - first < 2 * shortest or shortest < 1:
+    binary segmentation of the mean specific force (its direction) and the mean gyro rate.
+
+    Each change must stand far above the scatter of the means over ``block`` samples (1 s; a sway's
+    included) and leave ``block`` samples on either side; the pieces are searched again while they are at
+    least ``longest`` samples long (two static segments), so the search ends on any data.
+    """
+    if stop - first < max(2 * block, longest) or block < 1:
         return []
     for pulses, test in ((accel, _force_jump), (gyro, _rate_jump)):
         part = pulses[first:stop]
         n = len(part)
         total = part.sum(axis=0)
-        k = np.arange(shortest, n - shortest + 1)
+        k = np.arange(block, n - block + 1)
         left = np.cumsum(part, axis=0)[k - 1]
         mean_left, mean_right = left / k[:, None], (total - left) / (n - k)[:, None]
         score = np.sum((mean_left - mean_right) ** 2, axis=1) * k * (n - k) / n
         i = int(np.argmax(score))
-        if test(part, shortest, mean_left[i], mean_right[i]):
+        if test(mean_left[i], mean_right[i]) and _stands_out(part, block, mean_left[i], mean_right[i]):
             split = first + int(k[i])
-            return jumps(gyro, accel, first, split, shortest) + [split] + jumps(gyro, accel, split, stop, shortest)
+            return (jumps(gyro, accel, first, split, block, longest) + [split]
+                    + jumps(gyro, accel, split, stop, block, longest))
     return []
 
 
-def _force_jump(part, block, before, after) -> bool:
+def _force_jump(before, after) -> bool:
     """The mean specific force turns by more than :data:`JUMP_FORCE_DEG`."""
     cos = before @ after / (np.linalg.norm(before) * np.linalg.norm(after) + 1e-300)
     return bool(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) > JUMP_FORCE_DEG)
 
 
-def _rate_jump(part, block, before, after) -> bool:
-    """A change of the mean gyro rate far above the scatter of its means over ``block`` samples (a sway's
-    included: its rate is far from white)."""
+def _rate_jump(before, after) -> bool:
+    """The mean gyro rate changes by more than :data:`JUMP_RATE_SHARE` of its magnitude."""
     change = float(np.linalg.norm(after - before))
+    return bool(change > JUMP_RATE_SHARE * float(np.linalg.norm(before + after)) / 2.0)
+
+
+def _stands_out(part, block, before, after) -> bool:
+    """The change of the mean is :data:`JUMP_SIGMAS` times the typical step between consecutive means over
+    ``block`` samples (white noise, a sway's wander or pure noise alike)."""
     means = part[: len(part) // block * block].reshape(-1, block, 3).mean(axis=1)
     if len(means) < 4:
         return False
-    steps = np.linalg.norm(np.diff(means, axis=0), axis=1)
-    scatter = float(np.median(steps)) + 1e-300
-    share = change / max(float(np.linalg.norm(before + after)) / 2.0, 1e-300)
-    return bool(share > JUMP_RATE_SHARE and change > JUMP_RATE_SIGMAS * scatter)
+    scatter = float(np.median(np.linalg.norm(np.diff(means, axis=0), axis=1)))
+    return bool(np.linalg.norm(after - before) > JUMP_SIGMAS * scatter)
 
 
 def static_stretches(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, min_static_s: float):
@@ -335,7 +344,7 @@ def static_stretches(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, min_st
         settle = min(int(round(rate_hz)), (b - a) // 4)  # the edges' fits start this far inside the rest
         start = a if a == 0 else motion_end(track, b - settle, a - 1, rate_hz).safe
         stop = b if b == n else motion_start(track, a + settle, b, rate_hz).safe
-        cuts = jumps(gyro, accel, start, stop, max(1, int(round(rate_hz))))
+        cuts = jumps(gyro, accel, start, stop, max(1, int(round(rate_hz))), 2 * shortest)
         jumps_at += cuts
         edges = [start] + cuts + [stop]
         stretches += [(p, q) for p, q in zip(edges[:-1], edges[1:]) if q - p >= shortest]

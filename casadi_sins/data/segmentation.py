@@ -264,7 +264,8 @@ def _orientation(force: np.ndarray, rate: np.ndarray) -> str | None:
 def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
                       min_static_s: float = MIN_STATIC_S) -> tuple[Recording, list[str]]:
     """A validated recording whose segments were found in its data (see the module docstring)."""
-    segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
+    with np.errstate(all="ignore"):  # absurd pulses (1e300) end in a reason, not in a page of warnings
+        segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
     return rec, notes

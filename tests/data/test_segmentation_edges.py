@@ -12,7 +12,7 @@ from casadi_sins.core.earth import EARTH_RATE
 from casadi_sins.core.errors import InputError
 from casadi_sins.core.orientation import orientation_to_dcm
 from casadi_sins.data.description import read_recording, write_recording
-from casadi_sins.data.problem import load_problem
+from casadi_sins.data.problem import GroupPlan, load_problem
 from casadi_sins.data.recording import Recording, validate_schedule
 from casadi_sins.data.segmentation import detect, refine, segment_recording
 from casadi_sins.model.output import output_model
@@ -114,6 +114,15 @@ def test_groups_joined_without_handling_are_split_where_the_attitude_jumps(kang_
            [0.0, 430.0, 860.0]
     assert sum("jumps with no motion" in n for n in notes) == 2
     assert max(abs(a.start - b.start) + abs(a.end - b.end) for a, b in zip(found.segments, rec.segments)) < 1e-6
+
+
+def test_a_jump_about_the_vertical_is_seen_in_the_earth_rate(kang_problem):
+    """Group 1 ends NDW, group 2 starts EDN: gravity stays, only the heading jumps (by 90 deg)."""
+    problem = dataclasses.replace(kang_problem, groups=(GroupPlan("NUE", ("+X", "+X")), GroupPlan("EDN", ("+Z", "+Z"))))
+    rec = simulate(problem.with_changes(quantize=True), seed=1).recording
+    found, notes = segment_recording(rec.time, rec.gyro, rec.accel, rec.rate_hz, rec.site, "found")
+    assert schedule(found) == schedule(rec) and found.group_segments(2)[0].start == 320.0
+    assert notes == ["320.00 s: the attitude jumps with no motion (groups joined without handling): a new group starts"]
 
 
 def test_segment_finds_the_schedule_of_every_problem_and_the_command_of_the_paper_s(tmp_path, capsys):

@@ -4,8 +4,7 @@
 :mod:`data.segmentation`); :func:`static_stretches` turns them into rests with exact edges, split where
 the attitude jumps with no motion at all.
 
-The rate magnitude sees a turn once it is well above the
-resting noise: a turn of the paper's half-sine profile within 0.02 s, but slow handling with a
+The rate magnitude sees a turn once it is well above the resting noise: a turn of the paper's half-sine profile within 0.02 s, but slow handling with a
 minimum-jerk time law (its rate grows like ``t^2``) only after 0.2-0.4 s.  The gyro-integrated angle
 is far more sensitive: at rest it follows a straight line (the Earth rate and the bias) plus the
 angle random walk, and from the onset ``t0`` it departs like ``c (t - t0)^p`` (``p = 2`` for a turn
@@ -14,9 +13,11 @@ that change point: for every candidate ``t0`` and ``p`` the line (with a slow cu
 ``c`` are least squares over a window reaching from a second of rest into the motion, and the smallest
 sum of squares wins.
 
-The static then ends where the fitted departure reaches the static's own noise level (the residual
-of the line at rest) before ``t0``: a stretch on the safe side by the onset's uncertainty, at most
-:data:`MAX_MARGIN_S`.  The same fit mirrored in time finds where motion ends.
+The static then ends where the fitted departure reaches twice the static's own noise level (the rms
+residual of the rest's polynomial) before ``t0``: on the safe side by the onset's uncertainty, less than
+half a sample for the paper's turns, at most :data:`MAX_MARGIN_S`.  The same fit mirrored in time finds
+where motion ends.  :func:`trim_rest` applies it to stated segment times (``refine``): an edge moves only
+when the motion fitted inside the stated rest stands :data:`TRIM_SIGMAS` noise levels clear.
 
 A simulated recording may join two groups with no handling at all: the attitude jumps inside one rest
 (a teleport).  The mean specific force's direction (or the Earth rate's, for a turn about the

@@ -21,3 +21,4 @@ python benchmarks/bench_budget.py --runs 24 --out "$out"
 python benchmarks/bench_navigation.py | tee "$out/navigation-timing.txt"
 python benchmarks/bench_montecarlo.py --runs 100 | tee "$out/montecarlo-throughput.txt"
 python benchmarks/bench_modulation.py --out "$out/modulation"                # rotation modulation (issue 19), ~4 min
+python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 # segment edges next to slow handling

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import sys
 import time
@@ -13,6 +14,8 @@ from ..calibrate import calibrate
 from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
 from ..core.earth import Site
+from ..core.text import one_line
+from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
 from ..data.description import description_toml, read_recording
@@ -24,6 +27,8 @@ from ..nav.navigation import navigate
 from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
+from ..report.provenance import read_provenance
+from ..report.rounding import rounded
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
@@ -116,9 +121,14 @@ def cmd_segment(args) -> int:
 def cmd_export(args) -> int:
     """``export``: a table as compensation matrices or the PSINS struct."""
     params = read_table(args.table)
-    metadata = {k: v for k, v in (("unit_id", args.unit_id), ("table", str(args.table))) if v}
+    origin = read_provenance(args.table)  # the companion report's unit id, date and recording hash
+    if args.unit_id and origin.unit_id and args.unit_id != origin.unit_id:
+        raise CliError(f"{one_line(args.table)}: --unit-id {one_line(args.unit_id, 60)} but the table's report says "
+                       f"unit {one_line(origin.unit_id, 60)}")
+    metadata = {**origin.metadata(), **({"unit_id": args.unit_id} if args.unit_id else {})}
     atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
-    print(f"wrote {args.out} ({args.format})")
+    print(f"wrote {args.out} ({args.format})" + ("" if origin.from_report else
+                                                 "; note: no companion report beside the table, so no recording hash"))
     return 0
 
 
@@ -133,7 +143,7 @@ def cmd_calibrate(args) -> int:
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
         result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
-                           **options)
+                           refine_segments=False, **options)  # refined above: the report shows those times
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
     if args.strict and result.warnings:
@@ -143,7 +153,9 @@ def cmd_calibrate(args) -> int:
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id))
     files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver}))
+        "unit_id": args.unit_id, "table": str(args.out),
+        "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
+        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
@@ -170,7 +182,8 @@ def cmd_compare(args) -> int:
     table = comparison.table
     cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
     if truth is not None:
-        print(table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+        print(rounded(table, {c: c.replace("error", "sigma") for c in cols if "error" in c}, signed=True)[cols]
+              .to_string(index=False))
     print(f"wrote the comparison to {args.out}")
     return 0
 
@@ -249,7 +262,8 @@ def cmd_demo(args) -> int:
     comparison = demo.comparison
     print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
     cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
-    print(comparison.table[cols].to_string(index=False, float_format=lambda x: f"{x:+.4f}"))
+    print(rounded(comparison.table[cols], {c: "nlp sigma (natural)" for c in cols[2:4]}, signed=True)
+          .to_string(index=False))
     print("navigation check, 1 h static free-inertial after alignment:")
     print(demo.navigation.to_string(index=False, float_format=_number_format()))
     print("error budget of static navigation with the NLP's parameters (1 sigma, m):")

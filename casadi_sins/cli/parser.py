@@ -6,9 +6,10 @@ import argparse
 
 from ..core.version import __version__
 from ..report.exports import EXPORTS
-from .commands import (cmd_analyze, cmd_budget, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
-                       cmd_navcheck, cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
+from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
+                       cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
 from .modulation import cmd_modulate, cmd_modulate_mc
+from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 
 
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
@@ -60,8 +61,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    help="parameters: the paper's 21 (default); extended: also accelerometer quadratic scale, lever "
                    "arms and the gyro/accel time offset; auto: the extra groups the data support (nlp only)")
     p.add_argument("--export", nargs="+", choices=list(EXPORTS),
-                   help="also write the table as compensation matrices (NAME.compensation.json / .yaml) or as the "
-                   "PSINS clbt struct (NAME.clbt.m)")
+                   help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
+                   "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")
     p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
     p.set_defaults(func=cmd_calibrate)
 
@@ -76,9 +77,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--out", required=True, help="recording description NAME.toml to write")
     p.set_defaults(func=cmd_segment)
 
-    p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML) or PSINS clbt text")
+    p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML, C header) or PSINS "
+                       "clbt text, with the provenance from the table's companion report")
     p.add_argument("table", help="parameter table CSV")
-    p.add_argument("--format", required=True, choices=list(EXPORTS), help="json or yaml: compensation matrices; psins: the PSINS clbt struct")
+    p.add_argument("--format", required=True, choices=list(EXPORTS), help="json or yaml: compensation matrices; "
+                   "psins: the PSINS clbt struct; c: a C header for firmware (float64 arrays, inline function)")
     p.add_argument("--out", required=True, help="file to write")
     p.add_argument("--unit-id", help="serial number of the unit")
     p.set_defaults(func=cmd_export)
@@ -110,23 +113,31 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--out", default="runs/montecarlo", help="output folder (default runs/montecarlo)")
     p.set_defaults(func=cmd_montecarlo)
 
-    p = sub.add_parser("navcheck", help="1 h free-inertial navigation of a fresh static recording per table")
-    p.add_argument("problem", nargs="?", default=None, help="problem file (sensors, truth, noise; default paper)")
+    p = sub.add_parser("navcheck", help="free-inertial navigation at rest per table: a fresh simulated static "
+                       "recording of a problem, or the unit's own static recording")
+    p.add_argument("problem", nargs="?", default=None, metavar="PROBLEM_OR_RECORDING",
+                   help="problem file (sensors, truth, noise; default paper), or a recording REC.toml of the unit at "
+                   "rest (its longest static segment is navigated)")
     p.add_argument("--params", nargs="+", required=True, help="parameter tables to check")
     p.add_argument("--seed", type=int, default=0, help="seed of the fresh static recording (default 0)")
-    p.add_argument("--duration-s", type=float, default=3600.0, help="navigation time, s (default 3600)")
+    p.add_argument("--duration-s", type=float, help="navigation time, s (default 3600; on a recording: the rest of "
+                   "its static segment)")
     p.add_argument("--align-s", type=float, default=300.0, help="alignment time before it, s (default 300)")
     p.add_argument("--out", required=True, help="output folder")
-    p.set_defaults(func=cmd_navcheck)
+    p.set_defaults(func=cmd_navcheck_any)
 
-    p = sub.add_parser("budget", help="static navigation error over 1 h and 24 h by source, by covariance")
-    p.add_argument("problem", nargs="?", default=None, help="problem file: site, sensors, noise (default paper)")
+    p = sub.add_parser("budget", help="static navigation error over 1 h and 24 h by source, by covariance (a "
+                       "problem, or the unit's recording with its table)")
+    p.add_argument("problem", nargs="?", default=None, metavar="PROBLEM_OR_RECORDING",
+                   help="problem file: site, sensors, noise (default paper); or a recording REC.toml: its site and "
+                   "measured noise, with --params")
     p.add_argument("--params", help="calibrated parameter table with sigma (default: the schedule's predicted "
                    "covariance)")
-    p.add_argument("--orientation", default="ENU", help="orientation letters of the unit while navigating (default ENU)")
+    p.add_argument("--orientation", help="orientation letters of the unit while navigating (default ENU; on a "
+                   "recording, that of its longest static segment)")
     p.add_argument("--hours", type=float, default=24.0, help="navigation time, h (default 24)")
     p.add_argument("--out", required=True, help="output folder")
-    p.set_defaults(func=cmd_budget)
+    p.set_defaults(func=cmd_budget_any)
 
     p = sub.add_parser("demo", help="simulate the paper's experiment, both solvers side by side, navigation check and error budget")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
@@ -135,6 +146,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    "results/ are made by benchmarks/regenerate_results.sh)")
     p.set_defaults(func=cmd_demo)
     _add_modulation(sub)
+    add_production_commands(sub)
     return parser
 
 

@@ -5,7 +5,9 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
     name = "kang2013"
     [site]      latitude_deg, height_m, optional gravity_mps2
     [imu]       rate_hz
-    [timing]    static_s, rotation_s, optional first_static_s, gap_s, rate_profile
+    [timing]    static_s, rotation_s, optional first_static_s, gap_s, rate_profile, handling
+                (between groups: "turn", one turn with the rate profile, or "minimum-jerk", a hand
+                tumble through random attitudes, about 15 deg/s; see :mod:`sim.motion`)
     [[groups]]  start = "NUE", rotations = ["+Z", "-Y 180", ...] (axis, optional angle),
                 optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration)
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
@@ -36,6 +38,7 @@ from .recording import Segment
 
 FORMAT = "casadi-sins-problem/1"
 PROFILES = ("half-sine", "versine")
+HANDLINGS = ("turn", "minimum-jerk")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,13 +62,15 @@ class GroupPlan:
 
 @dataclasses.dataclass(frozen=True)
 class Timing:
-    """Segment durations (s): statics, rotations, the first static, handling gaps; the rotations' rate profile."""
+    """Segment durations (s): statics, rotations, the first static, handling gaps; the rotations' rate profile
+    and the handling's kind (``"turn"`` or ``"minimum-jerk"``)."""
 
     static_s: float = 100.0
     rotation_s: float = 10.0
     first_static_s: float | None = None
     gap_s: float = 0.0
     rate_profile: str = "half-sine"
+    handling: str = "turn"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,9 +198,12 @@ class _Reader:
             first_static_s=(self.number(doc, "first_static_s", "timing") if "first_static_s" in doc else None),
             gap_s=self.number(doc, "gap_s", "timing", 0.0),
             rate_profile=str(doc.get("rate_profile", "half-sine")),
+            handling=str(doc.get("handling", "turn")),
         )
         if timing.rate_profile not in PROFILES:
             raise self.fail(f"[timing] rate_profile must be one of {', '.join(PROFILES)}")
+        if timing.handling not in HANDLINGS:
+            raise self.fail(f"[timing] handling must be one of {', '.join(HANDLINGS)}")
         if min(timing.static_s, timing.rotation_s) <= 0 or timing.gap_s < 0:
             raise self.fail("[timing] durations must be positive (gap_s may be 0)")
         return timing

@@ -190,6 +190,8 @@ def check_rate(time: np.ndarray, rate_hz: float, where) -> str | None:
 def validate_schedule(rec: Recording) -> None:
     """Check the segments against each other and against the data; raise :class:`~core.errors.InputError` naming the segment."""
     where = rec.label
+    if not rec.segments:
+        raise InputError(where, "no segments: a recording needs at least one group of static and rotation segments")
     tol = TIME_TOLERANCE * rec.dt
     t_first, t_last = rec.time[0] - rec.dt, rec.time[-1]
     prev: Segment | None = None

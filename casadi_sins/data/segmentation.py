@@ -6,8 +6,11 @@ the Earth rate (15 deg/h), turning they see degrees per second, a ratio of thous
 1. the gyro rate magnitude (pulses, smoothed over 50 ms) separates *cores* of motion (above a fifth
    of the way from the resting level to the peak) from rest; each core is widened to where the rate
    comes back to the resting level (its spread, a sway included, times six, or 0.5 % of the peak);
-   quiet stretches shorter than ``min_static_s`` belong to the motion around them, and a static
-   segment keeps 0.1 s clear of the motion beside it;
+   quiet stretches shorter than ``min_static_s`` belong to the motion around them.  The rests' edges
+   are then placed at the fitted onset of the motion beside them, from the gyro-integrated angle's
+   departure from rest (:mod:`data.edges`: to a sample for the paper's turns, within 0.1 s for slow
+   handling, on the rest's safe side), and a rest in which the attitude jumps with no motion at all
+   (groups of a simulation joined without handling) is split there;
 2. the pulses' sizes are unknown, but at rest the gyros must see the Earth rate and the
    accelerometers 1 g: least squares over the static stretches gives rough sizes (about 1 %, a tenth
    on a swaying base); the gyros' are refined by the turns, which are multiples of 90 deg;
@@ -18,8 +21,13 @@ the Earth rate (15 deg/h), turning they see degrees per second, a ratio of thous
 5. groups need a rotation; segments are written in the interchange format, times as the sample
    intervals' bounds.
 
+When no schedule is found :func:`detect` says why, in one :class:`~core.errors.InputError`: nothing
+turns, the rests are too short, the gyros at rest read a bias far above the Earth rate (the same in
+every orientation: a MEMS unit, outside this design), or no motion is a turn of a multiple of 90 deg.
+
 :func:`refine` checks a given description against the same signals: motion at the edge of a static
-segment is trimmed off (a warning), motion inside one is an error naming it.
+segment is trimmed off at its fitted onset (a warning that says so, never left to look like a sway),
+motion inside one is an error naming it.  :func:`calibrate.calibrate` refines before it calibrates.
 """
 
 from __future__ import annotations
@@ -33,71 +41,15 @@ from ..core import orientation as orient
 from ..core.earth import EARTH_RATE, Site
 from ..core.errors import InputError
 from ..core.rotations import triad
+from .edges import Activity, MotionSpan, activity, angle_track, find_motions, static_stretches, trim_rest  # noqa: F401
 from .recording import Recording, Segment, validate_schedule
 
-#: Seconds of smoothing of the rate magnitude, and the shortest rest that counts as a static segment.
-SMOOTH_S = 0.05
+#: The shortest rest that counts as a static segment (s).
 MIN_STATIC_S = 20.0
-#: Seconds of guard between a static segment and the motion found beside it.
-GUARD_S = 0.1
 #: A turn is a rotation of the schedule when its angle is within this of a multiple of 90 deg, and its
 #: axis within this share of a body axis (the rest: handling).
 ANGLE_TOLERANCE_DEG = 8.0
 AXIS_TOLERANCE = 0.1
-
-
-@dataclasses.dataclass
-class MotionSpan:
-    """A stretch of samples in which the unit moves."""
-
-    first: int  # first moving sample
-    stop: int  # one past the last moving sample
-
-
-@dataclasses.dataclass
-class Activity:
-    """The rate magnitude and the thresholds that tell rest from motion."""
-
-    magnitude: np.ndarray  # smoothed gyro pulse-rate magnitude per sample
-    rest: float
-    peak: float
-    core: float
-    edge: float
-
-
-def activity(gyro: np.ndarray, rate_hz: float) -> Activity:
-    """Smoothed gyro rate magnitude (pulses per sample) and its thresholds."""
-    width = max(1, int(round(SMOOTH_S * rate_hz)))
-    kernel = np.ones(width) / width
-    smooth = np.column_stack([np.convolve(gyro[:, k], kernel, mode="same") for k in range(3)])
-    magnitude = np.linalg.norm(smooth, axis=1)
-    rest = float(np.percentile(magnitude, 20))
-    peak = float(np.percentile(magnitude, 99.99))
-    core = rest + 0.2 * (peak - rest)
-    quiet = magnitude[magnitude < rest + 0.05 * (peak - rest)]
-    spread = float(np.percentile(np.abs(quiet - np.median(quiet)), 95)) if len(quiet) else 0.0
-    edge = rest + max(6.0 * spread, 0.005 * (peak - rest))
-    return Activity(magnitude, rest, peak, core, edge)
-
-
-def find_motions(act: Activity, rate_hz: float, min_static_s: float = MIN_STATIC_S) -> list[MotionSpan]:
-    """Moving stretches: cores above the core threshold, widened to the edge threshold, merged across rests
-    shorter than ``min_static_s``."""
-    above = act.magnitude > act.edge
-    runs = _runs(above)
-    moving = [MotionSpan(a, b) for a, b in runs if np.any(act.magnitude[a:b] > act.core)]
-    merged: list[MotionSpan] = []
-    for m in moving:
-        if merged and (m.first - merged[-1].stop) < min_static_s * rate_hz:
-            merged[-1].stop = m.stop
-        else:
-            merged.append(m)
-    return merged
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
-    return list(zip(edges[0::2], edges[1::2]))
 
 
 def _rough_sizes(means: np.ndarray, magnitude: float, dt: float) -> np.ndarray | None:
@@ -111,19 +63,26 @@ def _rough_sizes(means: np.ndarray, magnitude: float, dt: float) -> np.ndarray |
 
 def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float, site: Site,
            min_static_s: float = MIN_STATIC_S) -> tuple[list[Segment], list[str]]:
-    """The segments of a recording found from its signals, and notes on what was taken for handling."""
+    """The segments of a recording found from its signals, and notes on what was taken for handling.
+
+    Raises
+    ------
+    InputError
+        When no schedule is found, saying why: no motion, rests too short, a gyro bias far above the
+        Earth rate, turns that are not multiples of 90 deg, attitudes off the letters.
+    """
+    if not (math.isfinite(min_static_s) and min_static_s > 0.0):
+        raise InputError(None, f"the shortest static segment must be a positive number of seconds, found "
+                               f"{min_static_s!r}")
     dt = 1.0 / rate_hz
-    act = activity(gyro, rate_hz)
-    motions = find_motions(act, rate_hz, min_static_s)
-    guard = int(round(GUARD_S * rate_hz))  # statics keep clear of the motion's slow start and end
-    bounds = [0] + [x for m in motions for x in (max(m.first - guard, 0), min(m.stop + guard, len(time)))] + \
-        [len(time)]
-    statics = [(a, b) for a, b in zip(bounds[0::2], bounds[1::2]) if (b - a) * dt >= min_static_s]
+    statics, jumps_at, motions = static_stretches(gyro, accel, rate_hz, min_static_s)
     if len(statics) < 2:
-        raise InputError(None, f"found {len(statics)} static stretch(es) of at least {min_static_s:g} s: no schedule "
-                             "of static positions and rotations")
+        raise InputError(None, _few_rests(gyro, accel, rate_hz, len(statics), motions, min_static_s))
     gyro_means = np.array([gyro[a:b].mean(axis=0) for a, b in statics])
     accel_means = np.array([accel[a:b].mean(axis=0) for a, b in statics])
+    ratio = bias_ratio(gyro_means, accel_means)
+    if ratio > BIAS_RATIO_LIMIT:
+        raise InputError(None, _bias_reason(ratio))
     accel_size = _rough_sizes(accel_means, site.g, dt)
     gyro_size = _rough_sizes(gyro_means, EARTH_RATE, dt)
     if accel_size is None:
@@ -133,27 +92,48 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
         gyro_size = np.full(3, EARTH_RATE * dt / float(np.mean(np.linalg.norm(gyro_means, axis=1))))
     gyro_size = _sizes_from_turns(gyro, statics, gyro_means, gyro_size)
     letters = [_orientation(f * accel_size, w * gyro_size) for f, w in zip(accel_means, gyro_means)]
+    segments, notes = _chain(time, gyro, statics, set(jumps_at), gyro_means, gyro_size, letters)
+    # groups need a rotation: a lone static position calibrates nothing
+    kept = [g for g in {s.group for s in segments} if sum(1 for s in segments if s.group == g) > 1]
+    dropped = sorted({s.group for s in segments} - set(kept))
+    if dropped:
+        notes.append(f"{len(dropped)} lone static position(s) without a rotation left out")
+    if not kept:
+        raise InputError(None, _no_turns(gyro, statics, set(jumps_at), gyro_means, gyro_size, accel_means, letters))
+    renumber = {g: i + 1 for i, g in enumerate(sorted(kept))}
+    out = [dataclasses.replace(s, group=renumber[s.group]) for s in segments if s.group in renumber]
+    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)], notes
+
+
+def _chain(time, gyro, statics, jumps_at: set, gyro_means, gyro_size, letters):
+    """Static stretches joined by turns into groups: ``(segments, notes)``; a motion that is no turn of a
+    multiple of 90 deg leading from one rest's letters to the next's, or an attitude jump, starts a group."""
+    dt = time[1] - time[0] if len(time) > 1 else 0.0
     notes = []
     segments: list[Segment] = []
     group = 0
     previous = None  # (static index) of the last static of the current group
     for k, (a, b) in enumerate(statics):
-        start, end = float(time[a] - dt), float(time[b - 1])
+        start, end = round(float(time[a] - dt), 9), round(float(time[b - 1]), 9)
         turn = None
-        if previous is not None:
-            pa, pb = statics[previous]
-            resting = (gyro_means[previous] + gyro_means[k]) / 2.0
-            turn = _turn(gyro[pb:a] - resting, gyro_size)
+        if previous is not None and a in jumps_at and statics[previous][1] == a:
+            notes.append(f"{start:.2f} s: the attitude jumps with no motion (groups joined without handling): a new "
+                         "group starts")
+        elif previous is not None:
+            pb = statics[previous][1]
+            pulses = gyro[pb:a] - (gyro_means[previous] + gyro_means[k]) / 2.0
+            turn = _turn(pulses, gyro_size)
             if turn is not None and letters[previous] and letters[k]:
                 expected = orient.rotate_body(orient.orientation_to_dcm(letters[previous]), turn[0],
                                               math.radians(turn[1]))
                 if np.abs(expected - orient.orientation_to_dcm(letters[k])).max() > 1e-6:
-                    notes.append(f"{time[pb - 1]:.2f}-{time[a] - dt:.2f} s: {turn[0]} {turn[1]:g} deg does not lead "
+                    notes.append(f"{time[pb - 1]:.2f}-{start:.2f} s: {turn[0]} {turn[1]:g} deg does not lead "
                                  f"from {letters[previous]} to {letters[k]}: taken for handling")
                     turn = None
             elif turn is None:
-                notes.append(f"{time[pb - 1]:.2f}-{time[a] - dt:.2f} s: not a turn of a multiple of 90 deg about one "
-                             "body axis: taken for handling between groups")
+                angle = float(np.linalg.norm(np.degrees(pulses.sum(axis=0) * gyro_size)))
+                notes.append(f"{time[pb - 1]:.2f}-{start:.2f} s: not a turn of a multiple of 90 deg about one "
+                             f"body axis ({angle:.3g} deg): taken for handling between groups")
         if letters[k] is None:
             notes.append(f"{start:.2f}-{end:.2f} s: the unit is not near an orientation of the letters N S E W U D "
                          "there: left out")
@@ -162,18 +142,76 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
         if turn is None:
             group += 1
         else:
-            segments.append(Segment(len(segments) + 1, group, "rotation", float(time[statics[previous][1] - 1]),
-                                    start, axis=turn[0], angle_deg=turn[1]))
+            turn_start = round(float(time[statics[previous][1] - 1]), 9)
+            segments.append(Segment(len(segments) + 1, group, "rotation", turn_start, start, axis=turn[0],
+                                    angle_deg=turn[1]))
         segments.append(Segment(len(segments) + 1, group, "static", start, end, orientation=letters[k]))
         previous = k
-    # groups need a rotation: a lone static position calibrates nothing
-    kept = [g for g in {s.group for s in segments} if sum(1 for s in segments if s.group == g) > 1]
-    dropped = sorted({s.group for s in segments} - set(kept))
-    if dropped:
-        notes.append(f"{len(dropped)} lone static position(s) without a rotation left out")
-    renumber = {g: i + 1 for i, g in enumerate(sorted(kept))}
-    out = [dataclasses.replace(s, group=renumber[s.group]) for s in segments if s.group in renumber]
-    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)], notes
+    return segments, notes
+
+
+#: A resting gyro rate this many times its change between orientations is a bias far above the Earth rate.
+BIAS_RATIO_LIMIT = 10.0
+
+
+def bias_ratio(gyro_means: np.ndarray, accel_means: np.ndarray) -> float:
+    """The resting gyro rate over half its largest change between static stretches whose gravity differs by
+    more than 30 deg: about 1 for a navigation-grade unit (the Earth rate turns with the unit), about
+    bias / Earth rate when a bias far above the Earth rate reads the same in every orientation; 0 when
+    no two stretches differ so.  Pulse sizes do not enter."""
+    level = float(np.median(np.linalg.norm(gyro_means, axis=1))) if len(gyro_means) else 0.0
+    up = accel_means / np.maximum(np.linalg.norm(accel_means, axis=1, keepdims=True), 1e-300)
+    changes = [float(np.linalg.norm(gyro_means[i] - gyro_means[j])) for i in range(len(up))
+               for j in range(i + 1, len(up)) if up[i] @ up[j] < np.cos(np.radians(30.0))]
+    if not changes or level == 0.0:
+        return 0.0
+    return level / max(max(changes) / 2.0, 1e-300 * level)
+
+
+def _bias_reason(ratio: float) -> str:
+    return (f"at rest the gyros read about {ratio:.3g} times what turning between the static positions changes in "
+            "them: a gyro bias far above the Earth rate (15 deg/h), as of a MEMS unit. This calibration needs the "
+            "Earth rate to show in the gyros at rest (a navigation-grade unit): outside its design")
+
+
+def _few_rests(gyro, accel, rate_hz: float, found: int, motions, min_static_s: float) -> str:
+    """Why fewer than two rests were found: nothing turns, or the rests are too short (or a large gyro bias)."""
+    if not motions:
+        return "no motion in the gyros (only rest, or noise): no schedule of static positions and rotations"
+    short, *_ = static_stretches(gyro, accel, rate_hz, 1.0)
+    longest = max([b - a for a, b in short], default=0) / rate_hz
+    reason = (f"found {found} rest(s) of at least {min_static_s:g} s between the motions, the longest lasts "
+              f"{longest:.3g} s: rests too short for static positions (--min-static-s sets the shortest)")
+    ratio = bias_ratio(np.array([gyro[a:b].mean(axis=0) for a, b in short]),
+                       np.array([accel[a:b].mean(axis=0) for a, b in short])) if len(short) > 1 else 0.0
+    return _bias_reason(ratio) + "; and " + reason if ratio > BIAS_RATIO_LIMIT else reason
+
+
+def _no_turns(gyro, statics, jumps_at: set, gyro_means, gyro_size, accel_means, letters) -> str:
+    """Why no group was found among the rests: no motion is a turn of a multiple of 90 deg (by the gyros,
+    or by gravity's direction, which needs no pulse size), no rest has letters, or the turns do not lead
+    from one rest's letters to the next's."""
+    angles, tilts, turns = [], [], 0
+    for k in range(1, len(statics)):
+        if statics[k][0] in jumps_at and statics[k - 1][1] == statics[k][0]:
+            continue
+        pulses = gyro[statics[k - 1][1]:statics[k][0]] - (gyro_means[k - 1] + gyro_means[k]) / 2.0
+        angles.append(float(np.linalg.norm(np.degrees(pulses.sum(axis=0) * gyro_size))))
+        turns += _turn(pulses, gyro_size) is not None
+        a, b = accel_means[k - 1], accel_means[k]
+        tilts.append(float(np.degrees(np.arccos(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1, 1)))))
+    off = [t for t in tilts if abs(t - 90.0 * round(t / 90.0)) > ANGLE_TOLERANCE_DEG]
+    if angles and (not turns or off):
+        shown_angles = ", ".join(f"{a:.3g}" for a in (off or angles)[:6]) + (", ..." if len(off or angles) > 6 else "")
+        what = "gravity turned by" if off else "they turned"
+        return (f"the motions between the rests are no turns of a multiple of 90 deg about one body axis ({what} "
+                f"{shown_angles} deg): no schedule of static positions and rotations")
+    lost = sum(x is None for x in letters)
+    if lost:
+        return (f"{lost} of the {len(statics)} rests are not near an orientation of the letters N S E W U D (within "
+                "30 deg; turns that are no multiples of 90 deg lead off them), and no two others are joined by a "
+                "turn: no schedule")
+    return "no two rests are joined by a turn of a multiple of 90 deg that leads from one to the other: no schedule"
 
 
 def _sizes_from_turns(gyro: np.ndarray, statics, gyro_means: np.ndarray, size: np.ndarray) -> np.ndarray:
@@ -226,7 +264,8 @@ def _orientation(force: np.ndarray, rate: np.ndarray) -> str | None:
 def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
                       min_static_s: float = MIN_STATIC_S) -> tuple[Recording, list[str]]:
     """A validated recording whose segments were found in its data (see the module docstring)."""
-    segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
+    with np.errstate(all="ignore"):  # absurd pulses (1e300) end in a reason, not in a page of warnings
+        segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
     return rec, notes
@@ -234,9 +273,17 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
 
 def refine(rec: Recording, min_static_s: float = 5.0) -> Recording:
     """Check a description's static segments against the data: trim motion at their edges (the rotations
-    beside them grow to meet them; a warning in ``rec.warnings``), reject motion inside one (naming it)."""
+    beside them grow to meet them; a warning in ``rec.warnings`` saying so), reject motion inside one
+    (naming it).
+
+    The rate magnitude finds motion well inside a segment; the edges are then placed at the fitted onset
+    of the motion beside them (:func:`data.edges.trim_rest`), so that slow handling or a turn that a
+    stated time runs into is cut off rather than left to look like a swaying base.  A description that
+    needs nothing is returned as it is (the same object).
+    """
     act = activity(rec.gyro, rec.rate_hz)
     moving = act.magnitude > act.edge
+    track = angle_track(rec.gyro)
     changed = []
     segments = list(rec.segments)
     for i, seg in enumerate(segments):
@@ -244,16 +291,23 @@ def refine(rec: Recording, min_static_s: float = 5.0) -> Recording:
             continue
         sl = rec.segment_samples(seg)
         flags = moving[sl]
-        if not flags.any():
-            continue
         quiet = np.flatnonzero(~flags)
-        if len(quiet) == 0 or flags[quiet[0]:quiet[-1] + 1].any() or (quiet[-1] + 1 - quiet[0]) * rec.dt < min_static_s:
+        if len(quiet) == 0 or flags[quiet[0]:quiet[-1] + 1].any():
             times = rec.time[sl][flags]
             raise InputError(rec.label, f"{seg.describe()} holds motion inside it ({times[0]:.2f}-{times[-1]:.2f} "
                                  "s): check the segment times, or let `casadi-sins segment` find them")
-        start = max(float(rec.time[sl.start + quiet[0]] - rec.dt), seg.start)
-        end = min(float(rec.time[sl.start + quiet[-1]]), seg.end)
-        changed.append(f"{seg.describe()} trimmed to {start:.2f}-{end:.2f} s: the unit still moved at its edge")
+        first, stop = trim_rest(track, moving, sl.start + int(quiet[0]), sl.start + int(quiet[-1]) + 1, rec.rate_hz)
+        if (stop - first) * rec.dt < min_static_s:
+            raise InputError(rec.label, f"{seg.describe()} is at rest for only {(stop - first) * rec.dt:.2f} s: "
+                                 "check the segment times, or let `casadi-sins segment` find them")
+        if (first, stop) == (sl.start, sl.stop):
+            continue
+        start = max(round(float(rec.time[first] - rec.dt), 9), seg.start)
+        end = min(round(float(rec.time[stop - 1]), 9), seg.end)
+        cut = [f"first {(first - sl.start) * rec.dt:.2f} s" if first > sl.start else "",
+               f"last {(sl.stop - stop) * rec.dt:.2f} s" if stop < sl.stop else ""]
+        changed.append(f"{seg.describe()} trimmed to {start:.2f}-{end:.2f} s: the unit was still moving in its "
+                       f"{' and '.join(c for c in cut if c)} (motion at a static segment's edge, cut off)")
         segments[i] = dataclasses.replace(seg, start=start, end=end)
     if not changed:
         return rec

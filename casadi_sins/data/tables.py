@@ -27,7 +27,7 @@ def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth
     frame = params.to_frame(truth)
     if as_truth:
         frame = frame[["parameter", "unit", "value"]]
-    return frame.to_csv(index=False, float_format="%.12g", na_rep="")
+    return frame.to_csv(index=False, na_rep="")  # shortest exact form of every float64: full precision
 
 
 def write_table(path: str | Path, params: ParameterSet, truth: ParameterSet | None = None,

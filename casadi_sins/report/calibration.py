@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.version import __version__
+from ..core.version import __version__, software_versions
 from ..calibrate.result import CalibrationResult
 from ..core.units import DEG_PER_H, UG
 from ..data.recording import Recording
@@ -30,6 +30,7 @@ from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..core.text import markdown_text
 from .plots import noise_plot, residual_plot
+from .rounding import rounded, sigma_in_value_unit
 from .tables import calibration_tables, markdown_table, natural_noise_frame
 
 
@@ -110,6 +111,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "format": "casadi-sins-report/1",
         "software": f"casadi-sins {__version__}",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "versions": software_versions(),
         "command": command,
         "unit_id": unit_id,
         "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
@@ -127,6 +129,8 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "checks": checks,
         "variance_factor": float(result.variance_factor),
         "parameters": parameter_rows(result.parameters, truth),
+        "covariance": (None if result.parameters.covariance is None
+                       else [[float(x) for x in row] for row in result.parameters.covariance]),  # SI, table order
         "strongest_correlations": strongest_correlations(result.parameters),
         "noise": {"model": _noise_dict(result.noise.model), "fitted": _noise_dict(result.noise.fitted),
                   "raw": _noise_dict(raw.model().merged(raw.upper_bounds()) if raw is not None else None),
@@ -155,6 +159,7 @@ def report_markdown(data: dict) -> str:
     lines = [f"# Calibration report: {markdown_text(rec['name'])} ({data['solver']})", "",
              f"- unit: {markdown_text(data.get('unit_id') or '(no --unit-id given)')}",
              f"- software: {data['software']}, created {data['created']}",
+             "- versions: " + ", ".join(f"{k} {v}" for k, v in data.get("versions", {}).items()),
              f"- recording: {markdown_text(rec['source'] or '(in memory)')}, sha256 `{rec['sha256']}`",
              f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
              f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
@@ -176,8 +181,12 @@ def report_markdown(data: dict) -> str:
     frame = pd.DataFrame(data["parameters"])
     cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
     cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
-    lines.append(markdown_table(frame[cols], "%.6g"))
-    lines += ["", "SI values (the table to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
+                       zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
+    shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
+    lines.append(markdown_table(shown[cols], "%.3g"))
+    lines += ["", "Values rounded to the second significant digit of their sigma; the full SI values (the table "
+              "to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
               "## Noise", ""]
     noise = data["noise"]
     models = {k: SensorNoise.from_natural(v) for k, v in (("raw data", noise["raw"]), ("in the model", noise["model"]),

@@ -9,6 +9,10 @@ with ``K^-1``, ``S`` and ``B`` also given separately (SI: rad, m/s, per pulse; r
 sigma of every parameter, the extra terms when estimated, and a metadata block (unit id, date,
 software, the recording's hash).
 
+C header (:mod:`report.cheader`): the same matrices as ``static const double`` arrays and an inline
+compensation function, for the unit's firmware.  Every export carries the provenance of its table
+(:mod:`report.provenance`) and is written with every number in full float64 precision.
+
 PSINS layout (text): the fields of the toolbox's ``clbt`` struct as MATLAB assignments, such that
 its compensation ``wm' = Kg*wm - eb*ts``, ``vm' = Ka*vm - db*ts`` applied to increments in rad and
 m/s made with the nominal pulse sizes (``wm = p_g dN_g``) gives our compensated increments:
@@ -31,6 +35,7 @@ from ..model.extras import psins_fields
 from ..model.output import sensor_matrices
 from ..model.parameters import ParameterSet
 from ..model.registry import N_PARAMS, unit_of
+from .cheader import c_header
 
 
 def compensation(params: ParameterSet, metadata: dict | None = None) -> dict:
@@ -110,11 +115,11 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
 
     def mat(m):
         m = np.atleast_2d(m)
-        return "[" + "; ".join(" ".join(f"{x + 0.0:.15g}" for x in row) for row in m) + "]"  # no -0
+        return "[" + "; ".join(" ".join(repr(float(x) + 0.0) for x in row) for row in m) + "]"  # no -0
 
     k_g_inv, k_a_inv = np.linalg.inv(k_g), np.linalg.inv(k_a)
     lines = [f"% PSINS clbt struct from casadi-sins {__version__}",
-             f"% wm = {p_g:.15g} * dN_g (rad), vm = {p_a:.15g} * dN_a (m/s); then wm' = Kg*wm - eb*ts, "
+             f"% wm = {p_g!r} * dN_g (rad), vm = {p_a!r} * dN_a (m/s); then wm' = Kg*wm - eb*ts, "
              "vm' = Ka*vm - db*ts"]
     lines += [f"% {code_comment(k)}: {code_comment(v)}" for k, v in (metadata or {}).items()]
     lines += [f"clbt.Kg = {mat(k_g_inv @ np.diag(s_g.ravel()) / p_g)};",
@@ -125,13 +130,14 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
     lines += [f"clbt.Ka2 = {mat(extra['Ka2'][:, None])};  % s^2/m",
               f"clbt.rx = {mat(extra['rx'][:, None])}; clbt.ry = {mat(extra['ry'][:, None])}; "
               "clbt.rz = [0; 0; 0];  % m",
-              f"clbt.tGA = {extra['tGA']:.15g};  % s"]
+              f"clbt.tGA = {float(extra['tGA'])!r};  % s"]
     return "\n".join(lines) + "\n"
 
 
 EXPORTS = {"json": ("compensation.json", lambda p, meta: to_json(compensation(p, meta))),
            "yaml": ("compensation.yaml", lambda p, meta: to_yaml(compensation(p, meta))),
-           "psins": ("clbt.m", lambda p, meta: psins_clbt(p, metadata=meta))}
+           "psins": ("clbt.m", lambda p, meta: psins_clbt(p, metadata=meta)),
+           "c": ("compensation.h", c_header)}
 
 
 def export_files(params: ParameterSet, table_path, formats, metadata: dict) -> dict:

@@ -14,7 +14,8 @@ from ..core.units import UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet, natural_errors
-from ..model.registry import natural_value_of
+from ..model.registry import group_of, natural_value_of
+from .rounding import format_sigma, format_with_sigma, rounded, sigma_in_value_unit
 from ..nav.navigation import GroupNavigation, static_velocities
 
 def recording_summary(rec: Recording) -> str:
@@ -45,11 +46,14 @@ def static_velocity_table(rec: Recording, navs: list[GroupNavigation]) -> pd.Dat
 
 
 def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
-                float_format: str = "%.6g") -> dict[Path, bytes]:
-    """A DataFrame as the contents of ``stem.csv`` and ``stem.md``."""
+                float_format: str = "%.6g", display: pd.DataFrame | None = None) -> dict[Path, bytes]:
+    """A DataFrame as the contents of ``stem.csv`` (every number in full precision: it is read by
+    programs) and ``stem.md`` (rounded with ``float_format``: it is read by people), the latter from
+    ``display`` when given (e.g. numbers as text rounded from their sigma, :mod:`report.rounding`)."""
     stem = Path(stem)
-    md = (f"# {markdown_text(title)}\n\n" if title else "") + markdown_table(frame, float_format) + "\n"
-    return {stem.with_name(stem.name + ".csv"): frame.to_csv(index=False, float_format=float_format).encode(),
+    md = (f"# {markdown_text(title)}\n\n" if title else "") + markdown_table(frame if display is None else display,
+                                                                              float_format) + "\n"
+    return {stem.with_name(stem.name + ".csv"): frame.to_csv(index=False).encode(),
             stem.with_name(stem.name + ".md"): md.encode()}
 
 
@@ -91,22 +95,30 @@ def calibration_tables(result, stem: str | Path, name: str, truth: ParameterSet 
     ``name``, CSV + Markdown, as ``{path: content}`` (``stem-iterations.*``, ``stem-parameters.*``)."""
     files = frame_files(result.history_frame(truth), f"{stem}-iterations",
                         f"{name}: {result.solver} per iteration (errors in natural units)", "%.8g")
-    files.update(frame_files(parameter_report(result, truth), f"{stem}-parameters",
+    report = parameter_report(result, truth)
+    sigma_si = [sigma_in_value_unit(n, v, s) * (1.0 if group_of(n).relative else group_of(n).natural_scale)
+                for n, v, s in zip(report["parameter"], report["value"], report["sigma (natural)"])]
+    display = rounded(report.assign(_sigma=sigma_si), {"value": "_sigma", "truth": "_sigma",
+                                                       "error (natural)": "sigma (natural)"}).drop(columns="_sigma")
+    files.update(frame_files(report, f"{stem}-parameters",
                              f"{name}: {result.solver} calibration ({result.nit} iterations, "
-                             f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g"))
+                             f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g", display))
     return files
 
 
 def natural_table(frame):
-    """The terminal table: values and sigma in natural units (SI stays in the CSV)."""
+    """The terminal table: values and sigma in natural units (SI stays in the CSV), each value rounded to
+    its sigma's second significant digit (:mod:`report.rounding`)."""
     values = [natural_value_of(name, value) for name, value in zip(frame["parameter"], frame["value"])]
+    sigma = frame["sigma (natural)"]
     out = pd.DataFrame({"parameter": frame["parameter"],
-                        "value": [f"{v:.9g}" if u == "m/s/pulse" else f"{v:.6g}" for v, u in values],
+                        "value": [format_with_sigma(v, sigma_in_value_unit(n, v, s))
+                                  for n, (v, _), s in zip(frame["parameter"], values, sigma)],
                         "unit": [u for _, u in values],
-                        "1-sigma": [f"{s:.3g}" for s in frame["sigma (natural)"]],
+                        "1-sigma": [format_sigma(s) for s in sigma],
                         "sigma unit": frame["natural unit"]})
     if "error (natural)" in frame:
-        out["error"] = [f"{e:+.3g}" for e in frame["error (natural)"]]
+        out["error"] = [format_with_sigma(e, s, signed=True) for e, s in zip(frame["error (natural)"], sigma)]
         out["error/sigma"] = [f"{e:+.2f}" for e in frame["error/sigma"]]
     return out
 

@@ -3,7 +3,11 @@
 The unit sits at the centre of a turntable fixed to the Earth.  In a static segment its attitude
 ``C_b^n`` is constant; in a rotation it turns about an axis fixed in the body,
 ``C(t) = C_0 R(u, alpha(t))``, with a sinusoidal rate profile; between groups it is handled to the
-next start position.  A swaying base turns the whole unit about its centre.
+next start position: one turn with the rotations' rate profile (``[timing] handling = "turn"``, the
+default), or a tumble by hand (``"minimum-jerk"``): slerps through :data:`HANDLING_WAYPOINTS` random
+attitudes, each leg with the minimum-jerk time law ``10 tau^3 - 15 tau^4 + 6 tau^5`` and a peak rate
+of :data:`HANDLING_PEAK_DEG_S` (higher when the legs need it to fit the gap), pauses at the waypoints
+filling the rest of the gap.  A swaying base turns the whole unit about its centre.
 """
 
 from __future__ import annotations
@@ -16,6 +20,13 @@ from ..core.orientation import orientation_to_dcm, parse_axis
 from ..core.rotations import rotation_matrices, rotation_matrix, rotation_vector
 from ..core.units import DEG
 from ..data.problem import Problem
+
+#: Hand tumbles between groups (``handling = "minimum-jerk"``): intermediate attitudes, the angle of each
+#: leg to them (deg, uniform) and the peak rate of every leg (deg/s; 1.875 x the leg's mean rate).
+HANDLING_WAYPOINTS = 3
+HANDLING_LEG_DEG = (60.0, 150.0)
+HANDLING_PEAK_DEG_S = 15.0
+
 
 @dataclasses.dataclass(frozen=True)
 class MotionPiece:
@@ -33,6 +44,8 @@ class MotionPiece:
         tau = np.clip((np.asarray(t) - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
         if self.profile == "half-sine":  # rate ~ sin(pi tau)
             return self.angle * 0.5 * (1.0 - np.cos(np.pi * tau))
+        if self.profile == "minimum-jerk":  # rate ~ tau^2 (1 - tau)^2
+            return self.angle * tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
         return self.angle * (tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi))  # versine: rate ~ 1 - cos
 
     def rate_at(self, t: np.ndarray) -> np.ndarray:
@@ -42,6 +55,8 @@ class MotionPiece:
         inside = (tau >= 0.0) & (tau <= 1.0)
         if self.profile == "half-sine":
             rate = self.angle * 0.5 * np.pi / span * np.sin(np.pi * tau)
+        elif self.profile == "minimum-jerk":
+            rate = self.angle / span * 30.0 * tau**2 * (1.0 - tau) ** 2
         else:
             rate = self.angle / span * (1.0 - np.cos(2.0 * np.pi * tau))
         return np.where(inside, rate, 0.0)
@@ -73,10 +88,7 @@ def plan_motion(problem: Problem, rng: np.random.Generator):
         offset = rng.choice([-1.0, 1.0], size=3) * dev.start_attitude_deg * DEG
         start = rotation_matrices(offset) @ nominal
         if attitude is not None and pieces[-1].t1 < segs[0].start:  # handling between groups
-            turn = rotation_vector(attitude.T @ start)
-            angle = float(np.linalg.norm(turn))
-            pieces.append(MotionPiece(pieces[-1].t1, segs[0].start, attitude,
-                                 turn / angle if angle > 0 else None, angle, problem.timing.rate_profile))
+            pieces += handling_pieces(pieces[-1].t1, segs[0].start, attitude, start, problem.timing, rng)
         attitude = start
         starts[group] = start
         for seg in segs:
@@ -94,6 +106,42 @@ def plan_motion(problem: Problem, rng: np.random.Generator):
             pieces.append(piece)
             attitude = piece.end_attitude
     return pieces, starts, statics, factors
+
+
+def _slerp_piece(t0: float, t1: float, attitude: np.ndarray, target: np.ndarray, profile: str) -> MotionPiece:
+    """The turn from ``attitude`` to ``target`` about one body axis (a slerp) over ``[t0, t1]``."""
+    turn = rotation_vector(attitude.T @ target)
+    angle = float(np.linalg.norm(turn))
+    return MotionPiece(t0, t1, attitude, turn / angle if angle > 0 else None, angle, profile)
+
+
+def handling_pieces(t0: float, t1: float, attitude: np.ndarray, target: np.ndarray, timing,
+                    rng: np.random.Generator) -> list[MotionPiece]:
+    """The handling between two groups over ``[t0, t1]``: one turn with the rate profile, or a hand tumble
+    (``timing.handling == "minimum-jerk"``, see the module docstring; draws from ``rng`` only then)."""
+    if timing.handling != "minimum-jerk":
+        return [_slerp_piece(t0, t1, attitude, target, timing.rate_profile)]
+    waypoints = [attitude]
+    for _ in range(HANDLING_WAYPOINTS):
+        axis = rng.standard_normal(3)
+        angle = rng.uniform(*HANDLING_LEG_DEG) * DEG
+        waypoints.append(waypoints[-1] @ rotation_matrix(axis, angle))
+    waypoints.append(target)
+    angles = np.array([np.linalg.norm(rotation_vector(a.T @ b)) for a, b in zip(waypoints[:-1], waypoints[1:])])
+    span = t1 - t0
+    durations = 1.875 * angles / (HANDLING_PEAK_DEG_S * DEG)  # peak rate of a minimum-jerk leg: 1.875 angle / T
+    if durations.sum() > span:  # faster legs to fit the gap
+        durations *= span / durations.sum()
+    pause = (span - durations.sum()) / HANDLING_WAYPOINTS  # at each intermediate waypoint
+    pieces = []
+    t = t0
+    for k, (a, b) in enumerate(zip(waypoints[:-1], waypoints[1:])):
+        end = t1 if k == len(durations) - 1 else t + durations[k]
+        pieces.append(_slerp_piece(t, end, a, b, "minimum-jerk"))
+        if k < HANDLING_WAYPOINTS and pause > 0:
+            pieces.append(MotionPiece(end, end + pause, b))
+        t = end + max(pause, 0.0)
+    return pieces
 
 
 @dataclasses.dataclass(frozen=True)

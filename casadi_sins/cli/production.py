@@ -1,0 +1,187 @@
+"""The production-line commands: ``apply``, ``history``, ``batch``, and ``navcheck`` / ``budget`` on a
+unit's own recording.  Parsing and printing only; the work is in :mod:`studies`."""
+
+from __future__ import annotations
+
+import io
+import time
+from pathlib import Path
+
+from ..core.files import write_files
+from ..core.toml import read_toml
+from ..data.description import read_recording
+from ..data.segmentation import refine
+from ..data.tables import read_table
+from ..data.tolerance import read_tolerance_sheet
+from ..report.provenance import read_provenance
+from ..report.rounding import format_sigma, format_with_sigma
+from ..report.tables import frame_files
+from ..studies.apply import apply_files, apply_table
+from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
+from ..studies.budget import plot_budget
+from ..studies.history import history_files, load_history
+from ..studies.navcheck import plot_navigation_check
+from ..studies.unitcheck import recording_budget, recording_navigation_check
+from .commands import CliError, cmd_budget, cmd_navcheck
+
+
+def _number(x) -> str:
+    return f"{x:.4g}"
+
+
+def cmd_apply(args) -> int:
+    """``apply``: a recording compensated with a table, and its check against gravity and the Earth rate."""
+    params = read_table(args.table)
+    rec = refine(read_recording(args.recording))
+    applied = apply_table(rec, params)
+    origin = read_provenance(args.table)
+    write_files(apply_files(applied, args.out, str(args.table), origin.table_sha256))
+    if not applied.check.empty:
+        print(applied.check.to_string(index=False, float_format=_number))
+    for note in applied.notes:
+        print(f"note: {note}")
+    worst = applied.worst()
+    print(f"worst static segment: gravity {worst.get('gravity_error_ug', float('nan')):.3g} ug, Earth rate "
+          f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean in the check table)")
+    print(f"wrote {args.out}/{applied.recording.file_stem}.{{toml,csv}} (increments in rad and m/s) and its check")
+    return 0
+
+
+def cmd_history(args) -> int:
+    """``history``: one unit's calibrations side by side by date."""
+    sheet = read_tolerance_sheet(args.tolerance) if args.tolerance else None
+    cals, notes = load_history(args.tables)
+    files, summary = history_files(cals, args.out, sheet, notes)
+    write_files(files)
+    for note in notes:
+        print(f"note: {note}")
+    shown = summary.copy()
+    shown["change"] = [format_with_sigma(c, s, signed=True) for c, s in zip(shown["change_first_to_last"],
+                                                                           shown["combined_sigma"])]
+    shown["drift_per_year"] = [format_with_sigma(d, s, signed=True) for d, s in zip(shown["drift_per_year"],
+                                                                                   shown["drift_sigma_per_year"])]
+    shown["combined_sigma"] = [format_sigma(s) for s in shown["combined_sigma"]]
+    cols = ["parameter", "unit", "change", "combined_sigma", "z_first_to_last", "max_abs_z", "drift_per_year",
+            "flagged", "status"]
+    print(shown[cols].to_string(index=False, float_format=lambda x: f"{x:+.2f}"))  # z
+    flagged = list(summary.loc[summary["flagged"], "parameter"])
+    failed = list(summary.loc[summary["status"] == "fail", "parameter"])
+    print(f"{len(cals)} calibrations; changed beyond {sheet.z_limit if sheet else 4.0:g} sigma: "
+          f"{', '.join(flagged) or 'none'}" + (f"; out of tolerance: {', '.join(failed) or 'none'}" if sheet else ""))
+    print(f"wrote {args.out}/history-*.{{csv,md,png}}")
+    return 0
+
+
+def cmd_batch(args) -> int:
+    """``batch``: every recording calibrated, the fleet table and the spread across units."""
+    from tqdm import tqdm
+
+    options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
+    t0 = time.perf_counter()
+    with tqdm(total=len(args.recordings), desc="batch", unit="unit") as bar:
+        fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask,
+                          progress=lambda k, n: bar.update(k - bar.n), resume=not args.no_resume)
+    spread = spread_frame(fleet)
+    fleet = with_outliers(fleet, spread)
+    write_files(batch_files(fleet, spread, args.out))
+    print(fleet[["unit_id", "status", "warnings", "outliers", "message"]].to_string(index=False))
+    failed = int((fleet["status"] == "failed").sum())
+    resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
+    print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed, {resumed} already done "
+          f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
+    return 0
+
+
+def is_recording(path) -> bool:
+    """Whether a TOML file is a recording description (else a problem file)."""
+    return str(read_toml(path, "problem file or recording description").get("format", "")).startswith(
+        "sins-recording")
+
+
+def cmd_navcheck_any(args) -> int:
+    """``navcheck``: on a problem (simulated) or on a unit's recording with its tables."""
+    if not (args.problem and is_recording(args.problem)):
+        args.duration_s = 3600.0 if args.duration_s is None else args.duration_s
+        return cmd_navcheck(args)
+    rec = read_recording(args.problem)
+    tables = {Path(p).stem: read_table(p).values for p in args.params}
+    runs, table, seg = recording_navigation_check(rec, tables, args.align_s, args.duration_s)
+    out = Path(args.out)
+    stem = rec.file_stem
+    files = frame_files(table, out / f"{stem}-navcheck", f"{rec.name}: free-inertial navigation on {seg.describe()}, "
+                        f"after {args.align_s:g} s of alignment")
+    buffer = io.BytesIO()
+    plot_navigation_check(runs, buffer, f"{rec.name}: horizontal position error at rest, after alignment")
+    files[out / f"{stem}-navcheck.png"] = buffer.getvalue()
+    write_files(files)
+    print(table.to_string(index=False, float_format=_number))
+    print(f"wrote {out}/{stem}-navcheck.{{csv,md,png}}")
+    return 0
+
+
+def cmd_budget_any(args) -> int:
+    """``budget``: on a problem, or on a unit's recording with its table."""
+    if not (args.problem and is_recording(args.problem)):
+        args.orientation = args.orientation or "ENU"
+        return cmd_budget(args)
+    if not args.params:
+        raise CliError(f"{args.problem}: a recording's budget needs the unit's table: --params P.csv")
+    rec = read_recording(args.problem)
+    params = read_table(args.params)
+    if params.sigma is None:
+        raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
+    budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
+    table = budget.table([3600.0, args.hours * 3600.0] if args.hours != 1.0 else [3600.0])
+    out = Path(args.out)
+    stem = rec.file_stem
+    files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
+                        f"source at {orientation} (1 sigma, m); measured white noise {accel_ug:.3g} ug and "
+                        f"{gyro_deg_h:.3g} deg/h per sample; parameter sigma only (no correlations)")
+    buffer = io.BytesIO()
+    plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
+    files[out / f"{stem}-budget.png"] = buffer.getvalue()
+    write_files(files)
+    print(f"measured white noise per sample: accelerometers {accel_ug:.3g} ug, gyros {gyro_deg_h:.3g} deg/h; "
+          f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
+    return 0
+
+
+def add_production_commands(sub) -> None:
+    """Register ``apply``, ``history`` and ``batch`` on the command line's subparsers."""
+    p = sub.add_parser("apply", help="compensate a recording with a table: the compensated recording (increments "
+                       "in rad and m/s) and its check against gravity and the Earth rate at rest")
+    p.add_argument("table", help="parameter table CSV to apply")
+    p.add_argument("recording", help="recording description NAME.toml (raw pulses)")
+    p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
+                   ".csv/.md")
+    p.set_defaults(func=cmd_apply)
+
+    p = sub.add_parser("history", help="one unit's calibrations by date: change per parameter against the combined "
+                       "sigma (z), drift per year, pass/fail against a tolerance sheet, a plot per group")
+    p.add_argument("tables", nargs="+", help="parameter tables of one unit (each with its companion NAME.report.json "
+                   "from calibrate: unit id, date, recording hash)")
+    p.add_argument("--tolerance", help="tolerance sheet TOML: [change] and [drift_per_year] limits per group or "
+                   "parameter in natural units, z_limit (default 4)")
+    p.add_argument("--out", required=True, help="output folder: history-summary, -changes, -calibrations "
+                   "(CSV, Markdown) and history-GROUP.png")
+    p.set_defaults(func=cmd_history)
+
+    p = sub.add_parser("batch", help="calibrate many units' recordings: a fleet table, the spread per parameter "
+                       "with outliers, each unit's table and report; resumable")
+    p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
+                   "recording's name)")
+    p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "
+                   "with NAME.report.json/.md")
+    p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address (the workers must "
+                   "read the recordings at the same paths), or 'local'")
+    p.add_argument("--workers", type=int, help="worker processes, local or of the local Dask cluster (default: one "
+                   "per core)")
+    p.add_argument("--solver", default="nlp", choices=["nlp", "ils"], help="solver for every unit (default nlp)")
+    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
+                   help="parameters for every unit (default the paper's 21; see calibrate --model)")
+    p.add_argument("--noise", help="sensor datasheet TOML of the unit type (see calibrate --noise)")
+    p.add_argument("--no-resume", action="store_true", help="calibrate every unit again, even those already done "
+                   "from the same recording")
+    p.set_defaults(func=cmd_batch)

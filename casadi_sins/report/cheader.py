@@ -1,0 +1,97 @@
+"""A parameter table as a C header for the unit's firmware.
+
+The header holds the compensation of eq. 1 inverted, per sensor, in ``static const double`` arrays
+(every number written in its shortest exact decimal form: the C compiler reads back the very
+float64 that Python used) and one inline function::
+
+    dtheta = M_g dN_g + c_g dt        M = K^-1 diag(S),  c = -K^-1 B
+    dv     = M_a dN_a + c_a dt
+
+with ``dN`` the raw pulses of one sample interval, ``dt`` its length (s), ``dtheta`` in rad and ``dv``
+in m/s (:func:`model.output.compensation_matrices`, the same numbers as the JSON export).  The unit
+id, the table's provenance (recording hash, date, software) are in the comment block and in string
+constants.  The extra terms beyond the 21 (quadratic scale, lever arms, time offset) are not in
+this per-sample affine form: when a table has them, the header says so and defines
+``CASADI_SINS_EXTRAS_NOT_COMPENSATED``.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ..core.text import code_comment
+from ..core.version import __version__
+from ..model.output import compensation_matrices
+from ..model.parameters import ParameterSet
+
+PREFIX = "casadi_sins"
+
+
+def _c_number(x: float) -> str:
+    text = repr(float(x) + 0.0)  # no -0; repr is the shortest string that reads back exactly
+    return text if any(c in text for c in ".en") else text + ".0"
+
+
+def _c_string(text: str) -> str:
+    """A C string literal of printable ASCII (anything else becomes ``?``, escaped: no trigraph)."""
+    clean = "".join(c if 32 <= ord(c) < 127 else "?" for c in str(text))
+    return '"' + clean.replace("\\", "\\\\").replace('"', '\\"').replace("?", "\\?") + '"'  # no trigraphs
+
+
+def _comment(text: str) -> str:
+    return "".join(c if 32 <= ord(c) < 127 else "?" for c in code_comment(text))
+
+
+def _matrix(name: str, m: np.ndarray) -> str:
+    rows = ",\n    ".join("{" + ", ".join(_c_number(x) for x in row) + "}" for row in m)
+    return f"static const double {PREFIX}_{name}[3][3] = {{\n    {rows}}};"
+
+
+def _vector(name: str, v: np.ndarray) -> str:
+    return f"static const double {PREFIX}_{name}[3] = {{" + ", ".join(_c_number(x) for x in v) + "};"
+
+
+def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
+    """The C header text of a parameter set (see the module docstring)."""
+    metadata = {k: v for k, v in (metadata or {}).items() if v is not None}
+    mats = compensation_matrices(params.core)
+    (m_g, c_g), (m_a, c_a) = mats["gyro"], mats["accel"]
+    guard = "CASADI_SINS_COMPENSATION_" + re.sub(r"[^A-Z0-9]", "_", str(metadata.get("unit_id", "")).upper()) + "_H"
+    lines = ["/* Sensor compensation of a strapdown IMU, written by casadi-sins " + __version__ + ".",
+             " *",
+             " * Per sample interval of length dt (s), from the raw pulses dN_g, dN_a of the three gyros and",
+             " * three accelerometers (body axes x, y, z):",
+             " *",
+             " *     dtheta = M_g dN_g + c_g dt   (rad)      M = K^-1 diag(S),  c = -K^-1 B",
+             " *     dv     = M_a dN_a + c_a dt   (m/s)",
+             " *",
+             " * the exact inverse of the output model dN = diag(S)^-1 (K x + B dt) (Kang et al. 2013, eq. 1):",
+             " * S scale factors (rad or m/s per pulse), K misalignment matrices (unit diagonal), B biases",
+             " * (rad/s, m/s^2). All numbers float64, SI; M in rad/pulse and m/s/pulse, c in rad/s and m/s^2.",
+             " *"]
+    lines += [f" * {_comment(k)}: {_comment(v)}" for k, v in metadata.items()]
+    if params.extras:
+        lines += [" *", " * NOT compensated here: the extra terms of this table (" + _comment(", ".join(params.extras))
+                  + "); see the JSON export."]
+    lines += [" */", f"#ifndef {guard}", f"#define {guard}", ""]
+    if params.extras:
+        lines += ["#define CASADI_SINS_EXTRAS_NOT_COMPENSATED 1", ""]
+    lines += [f"static const char {PREFIX}_unit_id[] = {_c_string(metadata.get('unit_id', ''))};",
+              f"static const char {PREFIX}_recording_sha256[] = {_c_string(metadata.get('recording_sha256', ''))};",
+              f"static const char {PREFIX}_table_sha256[] = {_c_string(metadata.get('table_sha256', ''))};", "",
+              _matrix("M_g", m_g), _vector("c_g", c_g), _matrix("M_a", m_a), _vector("c_a", c_a), "",
+              "/* Compensated increments of one sample interval: dtheta (rad) and dv (m/s). */",
+              f"static inline void {PREFIX}_compensate(const double dN_g[3], const double dN_a[3], double dt,",
+              "                                         double dtheta[3], double dv[3])",
+              "{",
+              "    int i;",
+              "    for (i = 0; i < 3; ++i) {",
+              f"        dtheta[i] = {PREFIX}_M_g[i][0] * dN_g[0] + {PREFIX}_M_g[i][1] * dN_g[1]"
+              f" + {PREFIX}_M_g[i][2] * dN_g[2] + {PREFIX}_c_g[i] * dt;",
+              f"        dv[i] = {PREFIX}_M_a[i][0] * dN_a[0] + {PREFIX}_M_a[i][1] * dN_a[1]"
+              f" + {PREFIX}_M_a[i][2] * dN_a[2] + {PREFIX}_c_a[i] * dt;",
+              "    }",
+              "}", "", f"#endif /* {guard} */"]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,65 @@
+"""Display rounding from the uncertainty: a number is shown to the decimal of its sigma's second
+significant digit, and the sigma with two significant digits.
+
+Only what people read is rounded (terminal and Markdown tables); every CSV and JSON keeps the full
+float64.  A gyro bias of 4.8535e-7 rad/s with sigma 1.02e-4 deg/h reads ``0.10011 +/- 0.00010``
+deg/h, not ``+0.0000``; a scale factor with sigma 0.24 ppm keeps the 8 significant digits that
+resolve it, not 6.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from ..model.registry import group_of
+
+
+def decimals(sigma: float, digits: int = 2) -> int | None:
+    """Decimals that show ``digits`` significant digits of ``sigma`` (None when sigma is not positive)."""
+    if sigma is None or not math.isfinite(sigma) or sigma <= 0:
+        return None
+    return digits - 1 - math.floor(math.log10(abs(sigma)))
+
+
+def format_with_sigma(value: float, sigma: float, signed: bool = False, digits: int = 2) -> str:
+    """``value`` rounded to the decimal of the ``digits``-th significant digit of ``sigma``.
+
+    Without a usable sigma the value is shown with 6 significant digits.
+    """
+    if value is None or not math.isfinite(value):
+        return ""
+    sign = "+" if signed else ""
+    places = decimals(sigma, digits)
+    if places is None:
+        return f"{value:{sign}.6g}"
+    if places >= 0:
+        return f"{value:{sign}.{places}f}"
+    return f"{round(value, places):{sign}.0f}"
+
+
+def format_sigma(sigma: float, digits: int = 2) -> str:
+    """A sigma with ``digits`` significant digits (never in exponent form for ordinary sizes)."""
+    places = decimals(sigma, digits)
+    if places is None:
+        return "" if sigma is None or not math.isfinite(sigma) else f"{sigma:.2g}"
+    return f"{sigma:.{max(places, 0)}f}"
+
+
+def sigma_in_value_unit(name: str, value: float, sigma_natural: float) -> float:
+    """A parameter's sigma in the unit its value is shown in: scale factors' ppm times the value."""
+    return sigma_natural * 1e-6 * abs(value) if group_of(name).relative else sigma_natural
+
+
+def rounded(frame: pd.DataFrame, pairs: dict[str, str], signed: bool = False) -> pd.DataFrame:
+    """A copy of ``frame`` with each column of ``pairs`` (value column -> sigma column) as text rounded
+    from the sigma, and the sigma columns with two significant digits."""
+    out = frame.copy()
+    for col, sig in pairs.items():
+        if col in out and sig in frame:
+            out[col] = [format_with_sigma(v, s, signed) for v, s in zip(frame[col], frame[sig])]
+    for sig in set(pairs.values()):
+        if sig in out:
+            out[sig] = [format_sigma(s) for s in frame[sig]]
+    return out

@@ -1,0 +1,208 @@
+"""A production batch: many units' recordings calibrated, a fleet table, the spread across units.
+
+Every recording is one unit (its unit id is the recording's ``name``).  Each is calibrated on its own
+(in local worker processes, or on a Dask cluster: a scheduler address or ``"local"``, through
+:func:`studies.parallel.run_all` as the Monte Carlo); its table and report are written under ``OUT/units/`` as soon as it is
+done, so that an interrupted batch resumes: a unit whose table and report exist and whose report
+names the SHA-256 of the recording as it is now is not calibrated again.  A unit that fails (an
+unreadable recording, a calibration that does not converge) is reported in the fleet table with its
+one-line reason; it never stops the others.  On a remote cluster the workers must read the
+recordings at the same paths (a shared file system); the results come back to this process, which
+writes every file.
+
+The fleet table has one row per unit (unit id, status, warnings, every parameter's value and sigma
+in SI); the spread table one row per parameter across the units that calibrated: median, robust
+spread (1.4826 x the median absolute deviation) and the units beyond ``threshold`` times the larger
+of that spread and the median sigma of one unit, flagged as outliers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import json
+import math
+import os
+import types
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..calibrate import calibrate
+from ..core.errors import InputError
+from ..core.files import safe_stem, write_files
+from ..core.text import one_line
+from ..data.datasheet import read_datasheet
+from ..data.description import read_recording
+from ..data.segmentation import refine
+from ..data.tables import table_text
+from ..model.registry import NAMES, natural_scale_of, natural_unit_of, relative_mask
+from ..report.calibration import companion_paths, recording_hash, report_files
+from ..report.tables import frame_files
+from .parallel import run_all
+
+#: Outlier threshold in robust spreads (see the module docstring).
+OUTLIER_THRESHOLD = 5.0
+
+
+@dataclasses.dataclass(frozen=True)
+class BatchOptions:
+    """How each unit is calibrated: solver, model, an optional datasheet (TOML path)."""
+
+    solver: str = "nlp"
+    model: str = "21"
+    noise: str | None = None
+
+
+def unit_table_path(out_dir, rec_path) -> Path:
+    """``OUT/units/STEM.csv``: the table of the unit of a recording ``STEM.toml``."""
+    return Path(out_dir) / "units" / f"{safe_stem(Path(rec_path).stem)}.csv"
+
+
+def file_hash(rec_path) -> str | None:
+    """The recording's SHA-256 as ``calibrate`` records it (TOML and data), from its path alone."""
+    return recording_hash(types.SimpleNamespace(source=Path(rec_path)))
+
+
+def finished(rec_path, out_dir) -> dict | None:
+    """The report of a unit already calibrated from this very recording, or None."""
+    table = unit_table_path(out_dir, rec_path)
+    report = companion_paths(table)[0]
+    if not (table.exists() and report.exists()):
+        return None
+    try:
+        data = json.loads(report.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    digest = (data.get("recording") or {}).get("sha256") if isinstance(data, dict) else None
+    return data if digest and digest == file_hash(rec_path) else None
+
+
+def row_from_report(data: dict, rec_path, status: str) -> dict:
+    """The fleet-table row of a unit from its report data."""
+    warnings = list(data.get("warnings") or [])
+    row = {"unit_id": data.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
+           "status": status if not warnings or status != "ok" else "warnings", "warnings": len(warnings),
+           "message": " | ".join(warnings), "wall_time_s": data.get("wall_time_s", math.nan)}
+    for p in data.get("parameters") or []:
+        row[p["parameter"]] = p["value"]
+        row[f"{p['parameter']}_sigma"] = math.nan if p.get("sigma") is None else p["sigma"]
+    return row
+
+
+def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOptions()) -> dict:
+    """Calibrate one unit; never raises: ``{"row": fleet row, "files": {path: bytes}}`` (no files on failure)."""
+    try:
+        rec = refine(read_recording(rec_path))
+        noise = read_datasheet(options.noise) if options.noise else None
+        result = calibrate(rec, solver=options.solver, noise=noise, model=options.model)
+        table = unit_table_path(out_dir, rec_path)
+        files = {table: table_text(result.parameters).encode()}
+        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.name))
+        data = json.loads(files[companion_paths(table)[0]])
+        return {"row": row_from_report(data, rec_path, "ok"), "files": files}
+    except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
+        message = one_line(exc, 500) or type(exc).__name__
+        if not hasattr(exc, "path") and type(exc).__name__ not in ("CalibrationError",):
+            message = f"{type(exc).__name__}: {message}"
+        return {"row": {"unit_id": Path(rec_path).stem, "recording": str(rec_path), "status": "failed",
+                        "warnings": 0, "message": message}, "files": {}}
+
+
+def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOptions(), workers: int | None = None,
+              scheduler: str | None = None, progress: Callable[[int, int], None] | None = None,
+              resume: bool = True) -> pd.DataFrame:
+    """Calibrate every recording (resuming: finished units are read back, not recomputed); each unit's
+    files are written as it finishes.  Returns the fleet table in the order of ``recordings``.
+
+    Raises
+    ------
+    InputError
+        When two recordings have the same file name (their units' files would be one).
+    """
+    paths = [str(Path(p).resolve()) for p in recordings]
+    stems: dict[Path, str] = {}
+    for path in paths:
+        table = unit_table_path(out_dir, path)
+        if table in stems:
+            raise InputError(path, f"its unit's table would be {table.name}, as that of {stems[table]}: give the "
+                             "recordings of a batch different file names")
+        stems[table] = path
+    rows: dict[str, dict] = {}
+    pending = []
+    for path in paths:
+        data = finished(path, out_dir) if resume else None
+        if data is None:
+            pending.append(path)
+        else:
+            rows[path] = {**row_from_report(data, path, "ok"), "resumed": True}
+    done = len(rows)
+    if progress:
+        progress(done, len(paths))
+
+    def collect(result: dict) -> None:
+        nonlocal done
+        if result["files"]:
+            write_files(result["files"])
+        rows[result["row"]["recording"]] = {**result["row"], "resumed": False}
+        done += 1
+        if progress:
+            progress(done, len(paths))
+
+    task = functools.partial(calibrate_unit, out_dir=str(out_dir), options=options)
+    workers = min(workers or os.cpu_count() or 1, max(len(pending), 1)) if not scheduler else workers
+    for result in run_all(task, pending, workers, scheduler) if pending else ():
+        collect(result)
+    return pd.DataFrame([rows[p] for p in paths])
+
+
+def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> pd.DataFrame:
+    """Per parameter across the units that calibrated: median, robust spread and outliers (natural units;
+    scale factors in ppm about the median)."""
+    ok = fleet[fleet["status"] != "failed"]
+    names = [n for n in NAMES if n in ok.columns]
+    rows = []
+    for name, scale, relative in zip(names, natural_scale_of(names), relative_mask(names)):
+        values = ok[name].to_numpy(dtype=float)
+        sigma = ok[f"{name}_sigma"].to_numpy(dtype=float)
+        median = float(np.median(values)) if len(values) else math.nan
+        natural = (values / median - 1.0) / scale if relative else (values - median) / scale
+        nat_sigma = sigma / (np.abs(values) if relative else 1.0) / scale
+        robust = 1.4826 * float(np.median(np.abs(natural))) if len(values) else math.nan
+        unit_sigma = float(np.nanmedian(nat_sigma)) if np.isfinite(nat_sigma).any() else 0.0
+        reference = max(robust, unit_sigma)
+        outliers = [u for u, x in zip(ok["unit_id"], natural) if reference > 0 and abs(x) > threshold * reference]
+        rows.append({"parameter": name, "unit": natural_unit_of(name), "units": len(values),
+                     "median (SI)": median, "robust spread": robust, "std": float(np.std(natural, ddof=1))
+                     if len(values) > 1 else math.nan, "min": float(natural.min()) if len(values) else math.nan,
+                     "max": float(natural.max()) if len(values) else math.nan, "median unit sigma": unit_sigma,
+                     "outliers": " ".join(map(str, outliers))})
+    return pd.DataFrame(rows)
+
+
+def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
+    """The fleet table with an ``outliers`` column: each unit's parameters flagged in the spread."""
+    flagged: dict[str, list[str]] = {}
+    for name, units in zip(spread["parameter"], spread["outliers"]):
+        for unit in str(units).split():
+            flagged.setdefault(unit, []).append(name)
+    out = fleet.copy()
+    out.insert(4, "outliers", [" ".join(flagged.get(str(u), [])) for u in out["unit_id"]])
+    return out
+
+
+def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path, bytes]:
+    """``fleet.csv`` (every value and sigma, full precision), ``fleet.md`` (status per unit) and
+    ``fleet-spread.csv/.md``."""
+    out = Path(out_dir)
+    failed = int((fleet["status"] == "failed").sum())
+    files = frame_files(fleet, out / "fleet", f"{len(fleet)} units, {failed} failed")
+    summary = fleet[[c for c in ("unit_id", "status", "warnings", "outliers", "message", "resumed") if c in fleet]]
+    files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {len(fleet)} units, {failed} failed; "
+                                          "values and sigma of every parameter in fleet.csv")[out / "fleet.md"]
+    files.update(frame_files(spread, out / "fleet-spread", "spread of each parameter across the units (natural "
+                             f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
+                             "max(robust spread, median unit sigma)", "%.4g"))
+    return files

@@ -13,7 +13,7 @@ from ..calibrate.result import CalibrationError
 from ..core.units import DEG_PER_H, UG
 from ..data.problem import Problem
 from ..model.noise import SensorNoise
-from ..model.parameters import natural_errors
+from ..model.parameters import joint_chi_square, natural_errors
 from ..model.registry import CORE_SPANS, NAMES, group_of
 from ..report.plots import pyplot, save_figure
 from ..sim import simulate
@@ -63,13 +63,14 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
         err = natural_errors(params, sim.truth)
         sigma = params.natural_sigma()
         truth = sim.truth.aligned(params.names)
+        chi_square = joint_chi_square(params, sim.truth)
         first = (natural_errors(np.asarray(res.history[1])[: len(params.names)], truth, params.names)
                  if len(res.history) > 1 else err)
         for i, name in enumerate(params.names):
             rows.append({"seed": seed, "solver": solver, "parameter": name, "group": group_of(name).label,
                          "unit": params.natural_units[i], "error": err[i], "sigma": sigma[i],
                          "first_iteration_error": first[i], "iterations": res.nit,
-                         "wall_time": res.wall_time, "warnings": len(res.warnings),
+                         "wall_time": res.wall_time, "warnings": len(res.warnings), "chi_square": chi_square,
                          "failed": ""})
     return rows
 

@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 import pandas as pd
+
 from casadi_sins.calibrate import CalibrationError, calibrate
 from casadi_sins.calibrate.initial import rough_parameters
 from casadi_sins.data.problem import load_problem

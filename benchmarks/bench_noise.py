@@ -125,9 +125,9 @@ def main():
         simulated=("simulated", "first"), mean_estimate=("estimate", "mean"),
         worst_relative_error=("relative_error", lambda e: float(e.abs().max())),
         determined=("determined", "mean")).reset_index()
-    write_frame(raw, f"{out}/noise-raw-estimates", "Raw-data noise estimates (third differences of block sums) "
-                "against the simulated white noise, 10 seeds x 3 axes (determined: share of axes where the raw "
-                "data fix it; otherwise the fit does)")
+    write_frame(raw, f"{out}/noise-raw-estimates", "Raw-data noise estimates (third differences of block sums; a "
+                "counter's from block means beneath its pulse) against the simulated white noise, 10 seeds x 3 axes "
+                "(determined: share of axes where the raw data fix it; otherwise the fit does)")
     print(raw.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     plot(table, f"{out}/noise-montecarlo.png")
 

@@ -10,6 +10,7 @@ casadi-sins demo --out "$out"                                                  #
 casadi-sins analyze problems/kang2013.toml problems/xie2011-19pos.toml --out "$out"   # predicted sigma
 casadi-sins montecarlo --runs 50 --out "$out"                                  # RMS against predicted sigma
 python benchmarks/bench_noise.py --runs 50 --no-datasheet --out "$out" | tee "$out/noise-benchmark.txt"
+python benchmarks/bench_quantization.py --runs 20 --out "$out" | tee "$out/quantization-benchmark.txt"   # coarse pulse counter (issue 16)
 python benchmarks/bench_extended.py --runs 30 --out "$out" | tee "$out/extended-benchmark.txt"
 python benchmarks/bench_phases.py --out "$out" | tee "$out/main-job-phases.txt"
 python benchmarks/bench_speed.py --out "$out" | tee "$out/speed.txt"             # whole processes, one core (issue 18)

@@ -1,7 +1,8 @@
 """The noise model of one calibration and where each of its terms came from.
 
 Terms come from a datasheet when given, else from the raw data when they determine them, else from
-the fit (white noise hidden under coarse pulses, bounded by the raw data).  Bias instability comes
+the fit (white noise hidden under coarse pulses, bounded by the raw data).  A counter's quantization
+is known: its integer pulses carry the remainder, one pulse / sqrt(12).  Bias instability comes
 from a datasheet only; without one the report says so.
 """
 
@@ -17,6 +18,10 @@ from ..model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
 from .motion import SegmentMotion, base_motion
 from .raw import RawNoise, estimate_sensor_noise
 
+#: The source of a counter's quantization: its integer pulses carry the remainder, one pulse / sqrt(12).
+COUNTER_SOURCE = "integer pulses (1 pulse / sqrt(12))"
+
+
 @dataclasses.dataclass
 class NoisePlan:
     """The noise model of a calibration and where each term came from."""
@@ -24,7 +29,7 @@ class NoisePlan:
     raw: RawNoise
     given: SensorNoise  # datasheet terms (None where not given)
     model: SensorNoise  # in use: given, else raw where determined, else fitted
-    source: dict[str, str]  # term -> "datasheet" | "raw data" | "fit" | "not modelled"
+    source: dict[str, str]  # term -> "datasheet" | "raw data" | COUNTER_SOURCE | "fit" | "not modelled"
     motions: list[SegmentMotion]
     warnings: list[str] = dataclasses.field(default_factory=list)  # a datasheet the data contradict
 
@@ -56,12 +61,19 @@ def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None 
 
     sources = {"gyro_arw": source(given.gyro_arw, determined.gyro_arw),
                "accel_vrw": source(given.accel_vrw, determined.accel_vrw),
-               "gyro_quantization": "datasheet" if given.gyro_quantization is not None else "raw data",
-               "accel_quantization": "datasheet" if given.accel_quantization is not None else "raw data",
+               "gyro_quantization": _quantization_source(given.gyro_quantization, raw.counter.get("gyro", False)),
+               "accel_quantization": _quantization_source(given.accel_quantization, raw.counter.get("accel", False)),
                "gyro_bias_instability": "datasheet" if given.gyro_bias_instability is not None else "not modelled",
                "accel_bias_instability": "datasheet" if given.accel_bias_instability is not None else "not modelled"}
     motions = base_motion(rec, reference, model)
     return NoisePlan(raw, given, model, sources, motions, warnings)
+
+
+def _quantization_source(given_value, counter: bool) -> str:
+    """Where a quantization term came from: a datasheet, a counter's pulse (known), or the raw data's fit."""
+    if given_value is not None:
+        return "datasheet"
+    return COUNTER_SOURCE if counter else "raw data"
 
 
 #: A datasheet's white-noise density more than this factor away from the raw data's determined estimate

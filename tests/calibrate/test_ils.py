@@ -89,3 +89,17 @@ def test_navigation_grade_noise_keeps_the_sigma_honest(kang_problem):
     sigma[R.SCALE_MASK] /= result.parameters.values[R.SCALE_MASK]
     z = natural_errors(result.parameters.values, sim.truth.values) / sigma
     assert np.abs(z).max() < 4.5 and 0.4 < np.sqrt(np.mean(z**2)) < 1.6
+
+
+def test_integer_pulse_counters_keep_the_sigma_honest(kang_problem):
+    """Issue 16: integer pulses 70x the accelerometer noise.  The white noise measured beneath them and the remainders
+    at the ends of each alignment segment in the equations' covariance keep the sigma honest and the residuals at
+    the noise model (with the white noise at the raw data's upper bound they were several times smaller)."""
+    sim = simulate(kang_problem.with_changes(quantize=True), seed=2)
+    result = calibrate_ils(sim.recording)
+    sigma = result.parameters.sigma / R.NATURAL_SCALE
+    sigma[R.SCALE_MASK] /= result.parameters.values[R.SCALE_MASK]
+    z = natural_errors(result.parameters.values, sim.truth.values) / sigma
+    assert np.abs(z).max() < 4.5 and 0.4 < np.sqrt(np.mean(z**2)) < 1.6
+    assert result.noise.sources["accel_vrw"] == "raw data" and not result.warnings
+    assert all(check.passed for check in result.checks)

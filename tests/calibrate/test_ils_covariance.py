@@ -1,5 +1,6 @@
 """The ILS's equation covariance, computed exactly in one backward pass (:mod:`calibrate.ils.covariance`),
-against a Monte Carlo of the same linear model: the random draws the package used before (the oracle)."""
+against a Monte Carlo of the same linear model: the random draws the package used before (the oracle), with
+a counter's remainders at the ends of the alignment segment drawn as issue 16's prototype drew them."""
 
 import dataclasses
 
@@ -113,11 +114,15 @@ def _draw_group(system: NoiseSystem, track, plan: GroupSteps, layout: Layout, mo
             f_cross_phi += system.f_cross @ (0.5 * (previous_phi + x[PHI])) * plan.step_dt[k]
             last_first = k
             gyro_sum = x[ACC].copy()
-    # the alignment (eq. 14) sees the first segment's mean noise: f_noise = C^T (dv - int f x phi) / T
+    # the alignment (eq. 14) sees the first segment's mean noise: f_noise = C^T (dv - int f x phi) / T, and the
+    # pulse remainders at the segment's two ends, (e_end - e_start) / T
     duration = float(plan.step_dt[plan.step_segment == first_seg].sum())
     c1 = track.attitude[last_first]
     accel_mean = c1.T @ (velocity[last_first] - f_cross_phi) / duration
-    return _GroupDraws(velocity, v_align, accel_mean, gyro_sum / duration, x)
+    gyro_mean = gyro_sum / duration
+    for mean, q in ((accel_mean, model.accel_quantization), (gyro_mean, model.gyro_quantization)):
+        mean += (rng.standard_normal((3, samples)) - rng.standard_normal((3, samples))) * q[:, None] / duration
+    return _GroupDraws(velocity, v_align, accel_mean, gyro_mean, x)
 
 
 def _segment_coefficients(draws, plan: GroupSteps, total, seg, axes, rows, equations, group: int,
@@ -150,15 +155,23 @@ def equations(kang_sim):
     return rec, params, eqs, navs, plan_noise(rec, params).model
 
 
-@pytest.mark.parametrize("bias_instability", [False, True])
-def test_exact_covariance_equals_a_monte_carlo_of_the_same_model(equations, bias_instability):
-    """Standard deviations and correlations of the 48 equations agree with 4,000 draws within the draws'
+#: Remainders (m/s, rad) ten times those of issue 16's coarse counter (pulse / sqrt(12) = 1e-4 m/s, 2.8e-8 rad),
+#: so that the equations' variances show them well beyond the draws' sampling error (the coarse size adds 3 %).
+QUANTIZATION = dict(accel_quantization=np.full(3, 1.0e-3), gyro_quantization=np.full(3, 2.8e-7))
+
+
+@pytest.mark.parametrize("terms", ["white", "bias instability", "quantization"])
+def test_exact_covariance_equals_a_monte_carlo_of_the_same_model(equations, terms):
+    """Standard deviations and correlations of the 48 equations agree with 2,500 draws within the draws'
     sampling error: a variance's relative standard error is sqrt(2 / N), a correlation's below 1 / sqrt(N);
-    the bounds are 4.5 of those (48 equations, 1,128 correlations)."""
+    the bounds are 4.5 of those (48 equations, 1,128 correlations).  With a counter's quantization the
+    remainders at the ends of the alignment segment are drawn (issue 16)."""
     rec, params, eqs, navs, model = equations
-    if bias_instability:
+    if terms == "bias instability":
         model = dataclasses.replace(model, gyro_bias_instability=1e-9, gyro_bias_tau=300.0,
                                     accel_bias_instability=5e-6, accel_bias_tau=200.0)
+    if terms == "quantization":
+        model = dataclasses.replace(model, **QUANTIZATION)
     exact = equation_covariance(rec, params, navs, eqs, model)
     with single_threaded():  # small matrices times thousands of draws: BLAS threads only slow them down
         drawn = monte_carlo_covariance(rec, params, navs, eqs, model, samples=DRAWS, seed=3)
@@ -169,5 +182,7 @@ def test_exact_covariance_equals_a_monte_carlo_of_the_same_model(equations, bias
     corr_drawn = drawn / np.outer(sd_drawn, sd_drawn)
     assert np.max(np.abs(corr_exact - corr_drawn)) < 4.5 / np.sqrt(DRAWS)
     # and the comparison can fail: a covariance with one term missing is far outside these bounds
-    without = equation_covariance(rec, params, navs, eqs, dataclasses.replace(model, accel_vrw=model.accel_vrw * 0.9))
+    smaller = (dict(accel_quantization=np.zeros(3), gyro_quantization=np.zeros(3)) if terms == "quantization"
+               else dict(accel_vrw=model.accel_vrw * 0.9))
+    without = equation_covariance(rec, params, navs, eqs, dataclasses.replace(model, **smaller))
     assert np.max(np.abs(np.diag(drawn) / np.diag(without) - 1.0)) > 4.5 * np.sqrt(2.0 / DRAWS)

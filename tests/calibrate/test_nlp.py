@@ -18,6 +18,7 @@ from casadi_sins.data.description import write_recording
 from casadi_sins.data.tables import read_table, write_table
 from casadi_sins.model import registry as R
 from casadi_sins.model.parameters import natural_errors
+from casadi_sins.report.calibration import report_data, report_markdown
 from casadi_sins.sim import simulate
 
 TOLERANCE = {"ug": 0.85, "ppm": 1.1, "arcsec": 0.6, "deg/h": 1.5e-4}
@@ -119,17 +120,22 @@ def test_compare_writes_side_by_side_outputs(kang_sim, tmp_path):
 
 
 def test_integer_pulse_counters_keep_accuracy_and_honest_sigma(kang_problem):
-    """Pitfall 8: integer pulses (the paper's pulse is 3.5 mg per sample, 700x the noise) add a white
-    velocity noise of about a pulse; the NLP observes in 5 s blocks, models it and stays accurate."""
+    """Pitfall 8: integer pulses (the paper's pulse is 3.5 mg per sample, 70x the noise) add a velocity error of
+    one pulse / sqrt(12); the NLP observes in 5 s blocks, models it and stays accurate."""
     sim = simulate(kang_problem.with_changes(quantize=True), seed=2)
     result = calibrate_nlp(sim.recording)
     err = assert_within(result.parameters.values, sim.truth.values)
     z = err / result.parameters.natural_sigma()
     assert np.abs(z).max() < 4.5 and np.sqrt(np.mean(z**2)) < 1.6
-    # the raw data cannot show the white noise under pulses 70x larger: the fit sets it (the sawtooth of
-    # the pulse remainders is only roughly white, and the fit gives part of it to the white noise)
-    assert result.noise.sources["accel_vrw"] == "fit"
-    assert 40.0 < result.nlp.white_noise_per_sample["accel_noise_ug"] < 100.0
+    # the white noise under pulses 70x larger shows in the raw data's block means, the remainder is one pulse
+    # (issue 16): nothing is left to the fit, and the whiteness check does not take the remainder for vibration
+    assert result.noise.sources["accel_vrw"] == "raw data"
+    assert result.noise.sources["accel_quantization"].startswith("integer pulses")
+    assert 42.0 < result.nlp.white_noise_per_sample["accel_noise_ug"] < 58.0
+    assert not result.warnings
+    data = report_data(result, sim.recording)  # the decision reaches the report files
+    assert data["noise"]["sources"]["gyro_quantization"] == "integer pulses (1 pulse / sqrt(12))"
+    assert "accel_quantization integer pulses (1 pulse / sqrt(12))" in report_markdown(data)
 
 
 REALISTIC = dict(accel_noise_ug=0.0, gyro_noise_deg_h=0.0, accel_vrw_ug_rthz=15.0, gyro_arw_deg_rth=0.002)

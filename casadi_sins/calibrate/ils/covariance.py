@@ -14,6 +14,12 @@ the first segment's mean specific force and rate.  Hence, in one backward pass,
 
     Cov(c) = sum_t H_t Q_t H_t^T,    H_t = G_t + H_(t+1) A_(t+1).
 
+A counter's pulse remainders (the quantization, ``s_e`` per axis) at the two ends of the alignment
+segment enter its mean specific force and rate as ``(e_end - e_start) / T``, independent of the states
+and of each other: the alignment's attitude error gains ``M diag(2 s_e^2) M^T / T^2`` (``M`` the
+linearised alignment), which every equation sees through its response to that error.  The remainders
+at the samples of the polynomial fits are left out: their share of a slope is about 1e-16 (m/s^2)^2.
+
 (Earlier versions estimated this covariance from 3,000 random draws of the same model; those carried
 a sampling error that moved the ILS's values by up to about 0.16 sigma between seeds.)
 """
@@ -87,6 +93,7 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs: list[GroupNavi
     for i, eq in enumerate(equations):
         by_group.setdefault(eq.group, []).append(i)
     previous_end = None
+    remainders = np.zeros((len(equations), len(equations)))
     for nav in navs:
         plan = plan_steps(rec, nav.group, 1.0, ROTATION_STEP_S)
         stops = np.cumsum(np.round(plan.step_dt / rec.dt).astype(int)) - 1
@@ -95,14 +102,29 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs: list[GroupNavi
         start = _group_start(model, layout, model_noise, float(plan.start_time), previous_end)
         first_seg = rec.group_segments(nav.group)[0].number
         steps = _propagate(model, system, track, plan, layout, model_noise, first_seg, start)
-        alignment = _alignment_functional(rec, params, nav, system, track, plan, steps, layout, first_seg)
+        alignment, m_align, duration = _alignment_functional(rec, params, nav, system, track, plan, steps, layout,
+                                                             first_seg)
         rows = by_group.get(nav.group, [])
         with_alignment = any(equations[i].segment == first_seg for i in rows)
+        to_alignment = np.zeros((len(equations), 3))  # each equation's response to the alignment's error
         for seg, axes in equation_segments(rec, nav.group, with_alignment):
             _segment_functionals(model, plan, steps, alignment, seg, axes, rows, equations, nav.group,
-                                 north_quadratic)
+                                 north_quadratic, to_alignment)
+        phi0 = alignment_remainders(m_align, duration, model_noise)
+        remainders += to_alignment @ phi0 @ to_alignment.T
         previous_end = float(plan.start_time + plan.step_dt.sum())
-    return model.covariance()
+    return model.covariance() + remainders
+
+
+def alignment_remainders(m_align: np.ndarray, duration: float, noise: SensorNoise) -> np.ndarray:
+    """Covariance (3, 3) of the alignment's attitude error from the pulse remainders at the two ends of its
+    segment: ``M diag(2 s_e^2) M^T / T^2`` for the means ``(e_end - e_start) / T`` (module docstring).
+
+    ``m_align`` (3, 6) is the alignment's response to its mean specific force and rate (body), ``duration``
+    the segment's length ``T``.
+    """
+    variance = 2.0 * np.concatenate([noise.accel_quantization, noise.gyro_quantization]) ** 2 / duration**2
+    return (m_align * variance) @ m_align.T
 
 
 def _group_start(model: LinearModel, layout: Layout, noise: SensorNoise, start: float, previous_end: float | None
@@ -152,8 +174,9 @@ def _propagate(model: LinearModel, system: NoiseSystem, track, plan: GroupSteps,
 
 
 def _alignment_functional(rec: Recording, params, nav: GroupNavigation, system: NoiseSystem, track, plan: GroupSteps,
-                          steps: _GroupSteps, layout: Layout, first_seg: int) -> dict[int, np.ndarray]:
-    """The alignment's attitude error as ``phi_0 = sum_t P_t x_t`` (eq. 15 linearised): ``{t: P_t (3, n)}``.
+                          steps: _GroupSteps, layout: Layout, first_seg: int):
+    """The alignment's attitude error as ``phi_0 = sum_t P_t x_t`` (eq. 15 linearised): ``{t: P_t (3, n)}``,
+    with the linearised alignment ``M`` (3, 6) and the segment's length ``T``.
 
     The alignment sees the first segment's mean noise: specific force ``C^T (dv - int f x phi) / T`` and
     rate ``a / T`` (the segment's gyro angle).
@@ -177,13 +200,14 @@ def _alignment_functional(rec: Recording, params, nav: GroupNavigation, system: 
         block[:, PHI] = -m_accel @ system.f_cross * 0.5 * h
         add(before, block)
         add(after, block)
-    return out
+    return out, m_align, duration
 
 
 def _segment_functionals(model: LinearModel, plan: GroupSteps, steps: _GroupSteps, alignment: dict, seg, axes,
-                         rows, equations, group: int, north_quadratic: bool) -> None:
+                         rows, equations, group: int, north_quadratic: bool, to_alignment: np.ndarray) -> None:
     """The fitted coefficients of one segment's velocity (the navigation's and the alignment's error) as
-    functionals of the states, into their equations' rows of ``G``."""
+    functionals of the states, into their equations' rows of ``G``; their response to the alignment's
+    attitude error into the rows of ``to_alignment``."""
     in_segment = np.flatnonzero(plan.step_segment == seg.number)
     tau = np.cumsum(plan.step_dt[in_segment])
     before = in_segment[0] - 1 if in_segment[0] > 0 and plan.step_segment[in_segment[0] - 1] >= 0 else None
@@ -199,5 +223,6 @@ def _segment_functionals(model: LinearModel, plan: GroupSteps, steps: _GroupStep
             if before is not None:  # relative to the velocity before the segment
                 model.g[steps.index[before]][i, DV.start + axis] -= weights.sum()
                 response = response - weights.sum() * steps.v_align[before, axis]
+            to_alignment[i] = response
             for t, block in alignment.items():
                 model.g[t][i] += response @ block

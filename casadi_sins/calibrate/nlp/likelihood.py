@@ -90,7 +90,7 @@ def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Noise
                          columns: np.ndarray) -> SensorNoise:
     """The white-noise terms the raw data did not determine (coarse pulses hide them), by restricted
     maximum likelihood between the floors and the raw data's upper bounds; with the accelerometers'
-    white noise also their quantization, which the sawtooth of coarse pulses makes only roughly white."""
+    white noise also their quantization when the raw data estimated it (a counter's is known: one pulse)."""
     free = [t for terms in noise_plan.free_terms().values() for t in terms]
     bounds = noise_plan.raw.upper_bounds()
     ranges = {"gyro_arw": (GYRO_ARW_FLOOR, max(float(bounds.gyro_arw.max()), GYRO_ARW_FLOOR * 10)),
@@ -99,7 +99,7 @@ def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Noise
     for t in free:  # no shape across axes is known: one level for the three
         setattr(model, t, np.full(3, float(np.median(getattr(model, t)))))
     terms = {t: (float(np.max(getattr(model, t))), *ranges[t]) for t in free}
-    if "accel_vrw" in free and np.max(model.accel_quantization) > 0:
+    if "accel_vrw" in free and np.max(model.accel_quantization) > 0 and not noise_plan.raw.counter.get("accel"):
         q = float(np.max(model.accel_quantization))
         terms["accel_quantization"] = (q, q / 10.0, q * 10.0)
     return estimate_terms(system, columns, model, terms)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import functools
+import os
 import time
 
 import numpy as np
@@ -25,8 +26,8 @@ from casadi_sins.calibrate import CalibrationError, calibrate
 from casadi_sins.calibrate.initial import rough_parameters
 from casadi_sins.data.problem import load_problem
 from casadi_sins.model.noise import SensorNoise
-from casadi_sins.model.parameters import natural_errors
-from casadi_sins.model.registry import ACCEL_SCALE, GYRO_SCALE, natural_scale_of, relative_mask
+from casadi_sins.model.parameters import joint_chi_square, natural_errors
+from casadi_sins.model.registry import ACCEL_SCALE, GYRO_SCALE
 from casadi_sins.noise.raw import estimate_sensor_noise
 from casadi_sins.report.tables import write_frame
 from casadi_sins.sim import simulate
@@ -40,13 +41,6 @@ CHI2_BAND = (6.4, 46.8)
 def coarse_problem():
     """The paper's problem at 200 Hz with a coarse pulse counter."""
     return dataclasses.replace(load_problem().with_changes(**COARSE), rate_hz=200.0, name="coarse-counter")
-
-
-def joint_chi2(params, truth) -> float:
-    """``e^T C^-1 e`` of the 21 natural errors against the covariance in the same units (scale factors relative)."""
-    err = natural_errors(params, truth)
-    scale = natural_scale_of(params.names) * np.where(relative_mask(params.names), np.abs(params.values), 1.0)
-    return float(err @ np.linalg.solve(params.covariance / np.outer(scale, scale), err))
 
 
 def run_seed(problem, seed: int) -> tuple[list[dict], list[dict]]:
@@ -69,7 +63,7 @@ def run_seed(problem, seed: int) -> tuple[list[dict], list[dict]]:
             rows.append({"seed": seed, "solver": solver, "failed": str(exc)})
             continue
         err, sigma, chi2 = natural_errors(res.parameters, truth), res.parameters.natural_sigma(), \
-            joint_chi2(res.parameters, truth)
+            joint_chi_square(res.parameters, truth)
         rows += [{"seed": seed, "solver": solver, "parameter": name, "error": err[i], "sigma": sigma[i],
                   "chi2": chi2, "warnings": " | ".join(res.warnings), "failed": ""}
                  for i, name in enumerate(res.parameters.names)]
@@ -116,6 +110,7 @@ def main():
     table = summarize(runs, raws)
     print(f"{args.runs} runs in {time.perf_counter() - t0:.0f} s")
     print(table.to_string(index=False))
+    os.makedirs(args.out, exist_ok=True)
     runs.to_csv(f"{args.out}/quantization-montecarlo-runs.csv", index=False)
     write_frame(table, f"{args.out}/quantization-montecarlo",
                 f"Coarse pulse counter (issue 16), {args.runs} seeds from {args.first_seed}, no datasheet: "

@@ -41,7 +41,7 @@ class BiasPiece:
     time : float
         Middle of the piece, s (recording time).
     segment : int
-        Its static segment, counted over the recording (-1: steps before a group's first one).
+        Its static segment, counted over the recording (``-1 - group``: steps before a group's first one).
     group : int
         Index of its group's track.
     """
@@ -97,7 +97,7 @@ def bias_responses(system: NoiseSystem, piece_s: float) -> tuple[np.ndarray, lis
         count = len(mids)
         columns = (slice(3 * first, 3 * (first + count)), slice(3 * (total + first), 3 * (total + first + count)))
         _track_responses(system, track, piece, count, out, columns)
-        pieces.append([(g, float(t), int(segments + seg) if seg >= 0 else -1) for t, seg in zip(mids, segs)])
+        pieces.append([(g, float(t), int(segments + seg) if seg >= 0 else -1 - g) for t, seg in zip(mids, segs)])
         first, segments = first + count, segments + int(np.sum(track.segment_start))
     return out, [BiasPiece(sensor, axis, t, seg, g) for sensor in SENSORS for group in pieces
                  for g, t, seg in group for axis in range(3)]
@@ -132,11 +132,12 @@ def _track_responses(system: NoiseSystem, track: GroupTrack, piece: np.ndarray, 
     at = {int(k): i for i, k in enumerate(last - 1)}
     for obs in track.observations:  # the velocity error; a gyro mean a / T + C_mid^T [w_ie x] phi_mid
         x = states[at[obs.step]]
-        if obs.kind != ObservationKind.VELOCITY:
-            x = np.vstack([np.zeros((3, x.shape[1])),
-                           system.gyro_mean_observation(track, obs.segment) @ np.vstack([x[ACC], x[PM]])])
-        out[obs.row:obs.row + 3, columns[0]] = x[DV, :3 * count]
-        out[obs.row:obs.row + 3, columns[1]] = x[DV, 3 * count:]
+        if obs.kind == ObservationKind.VELOCITY:
+            value = x[DV]
+        else:
+            value = system.gyro_mean_observation(track, obs.segment) @ np.vstack([x[ACC], x[PM]])
+        out[obs.row:obs.row + 3, columns[0]] = value[:, :3 * count]
+        out[obs.row:obs.row + 3, columns[1]] = value[:, 3 * count:]
 
 
 def _product(phi: np.ndarray) -> np.ndarray:

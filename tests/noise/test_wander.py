@@ -1,4 +1,4 @@
-"""The restricted likelihood of bias instability in closed form (issue 16) against the likelihood written out in full."""
+"""The restricted likelihood of bias instability in closed form (issue 16) against the likelihood in full."""
 
 import numpy as np
 

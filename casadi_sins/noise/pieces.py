@@ -117,27 +117,29 @@ def _track_responses(system: NoiseSystem, track: GroupTrack, piece: np.ndarray, 
     products = phi[first]  # one step between events: its own transition
     for i in np.flatnonzero(last - first > 1):
         products[i] = _product(phi[first[i]:last[i]])
-    switch = np.isin(first, starts)
+    switch = np.isin(first, starts).tolist()
     x = np.zeros((layout.n, 6 * count))
     states = np.zeros((len(first), layout.n, 6 * count))
-    for i in range(len(first)):
-        if switch[i]:  # this piece's offsets on, the others off
+    for i, on in enumerate(switch):
+        if on:  # this piece's offsets on, the others off
             col = 3 * piece[first[i]]
+            x = x.copy()
             x[layout.ba] = 0.0
             x[layout.bg] = 0.0
             x[layout.ba, col:col + 3] = np.eye(3)
             x[layout.bg, 3 * count + col:3 * count + col + 3] = np.eye(3)
-        x = products[i] @ x
-        states[i] = x
-    at = {int(k): i for i, k in enumerate(last - 1)}
-    for obs in track.observations:  # the velocity error; a gyro mean a / T + C_mid^T [w_ie x] phi_mid
-        x = states[at[obs.step]]
-        if obs.kind == ObservationKind.VELOCITY:
-            value = x[DV]
-        else:
-            value = system.gyro_mean_observation(track, obs.segment) @ np.vstack([x[ACC], x[PM]])
-        out[obs.row:obs.row + 3, columns[0]] = value[:, :3 * count]
-        out[obs.row:obs.row + 3, columns[1]] = value[:, 3 * count:]
+        x = np.matmul(products[i], x, out=states[i])
+    at = dict(zip((last - 1).tolist(), range(len(last))))
+    velocity = [obs for obs in track.observations if obs.kind == ObservationKind.VELOCITY]
+    rows = (np.array([obs.row for obs in velocity], dtype=int)[:, None] + np.arange(3)).ravel()
+    values = states[[at[obs.step] for obs in velocity]][:, DV].reshape(len(rows), -1)  # the velocity error
+    for obs in track.observations:  # a gyro mean a / T + C_mid^T [w_ie x] phi_mid
+        if obs.kind != ObservationKind.VELOCITY:
+            x = states[at[obs.step]]
+            rows = np.r_[rows, obs.row + np.arange(3)]
+            values = np.vstack([values, system.gyro_mean_observation(track, obs.segment) @ np.vstack([x[ACC], x[PM]])])
+    out[rows, columns[0]] = values[:, :3 * count]
+    out[rows, columns[1]] = values[:, 3 * count:]
 
 
 def _product(phi: np.ndarray) -> np.ndarray:

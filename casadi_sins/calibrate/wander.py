@@ -6,8 +6,9 @@ gives a sensor's instability, the solvers measure the wander the static data sho
 and decide here:
 
 * the correlation time is half the recording's span (:data:`TAU_FRACTION`: a recording cannot show
-  its own correlation time; with half the span the mean's variance the observed wander implies
-  matched the simulated process within 6 %, a quarter under-covered, the whole span over-covered);
+  its own correlation time; in issue 16's Monte Carlo, with half the span the mean's variance the
+  observed wander implies matched the simulated process within 6 %, a quarter under-covered, the
+  whole span over-covered);
 * a sensor's term enters the noise model when its likelihood ratio against none exceeds
   :data:`INCLUDE_LR` (one-sided p = 0.05 for the accelerometers, whose instability dominates their
   bias sigma at navigation grade; p = 0.005 for the gyros, whose bias the static means measure
@@ -28,18 +29,18 @@ from ..noise.plan import NoisePlan
 from ..noise.wander import SensorWander
 
 #: Static segments are cut into pieces of at most PIECE_S seconds, and a recording into at most MAX_PIECES
-#: (the wander is slow against span / 40 anyway).  Pieces of 50, 75, 100 or 150 s give the same restricted
-#: likelihood within a few tenths of ln L of the exact one (the Kalman model with Gauss-Markov states) near
-#: its optimum, and 100 s pieces the same decisions as 50 s ones in 20 navigation-grade recordings; 100 s
-#: keep a group of the paper's schedule within one compiled filter pass (issue 16).
+#: (the wander is slow against span / 40 anyway).  Pieces of 50, 75, 100 or 150 s give the restricted
+#: likelihood within 1 in ln L of the exact one (the Kalman model with Gauss-Markov states) near its optimum,
+#: none of them closer on every recording, and 100 s pieces the same decisions as 50 s ones in 20
+#: navigation-grade recordings; 100 s keep a group of the paper's schedule within one compiled filter pass.
 PIECE_S = 100.0
 MAX_PIECES = 40
 TAU_FRACTION = 0.5
 INCLUDE_LR = {"accel": 2.71, "gyro": 6.63}
 WARN_LR = 6.63
 #: The wander is taken for model mismatch when an acceleration constant in each static segment (independent
-#: between segments) fits better by this likelihood ratio (a lever arm or a quadratic scale factor: 126 on
-#: the 19-position peer recording; a true wander: within +-3).
+#: between segments) fits better by this likelihood ratio (the lever arms, quadratic scale factor and time
+#: offset of the 19-position peer recording: 41; a true wander, 20 navigation-grade recordings: -6.5 to 2.2).
 MISMATCH_LR = 6.63
 #: The noise source of an included term.
 SOURCE = "static data (restricted likelihood)"

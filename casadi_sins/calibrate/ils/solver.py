@@ -47,8 +47,8 @@ from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
 from ..limits import factor_limit, factor_low, separation_warnings
 from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
-from .covariance import equation_covariance
 from ..wander import describe, record, with_wander
+from .covariance import equation_covariance
 from .equations import build_equations, solve_equations
 from .wander import equation_bias_wander
 

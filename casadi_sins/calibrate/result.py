@@ -18,6 +18,7 @@ from ..model.parameters import ParameterSet, natural_errors
 from ..noise.motion import SegmentMotion
 from ..noise.observations import ObservationTable
 from ..noise.raw import RawNoise
+from ..noise.wander import SensorWander
 
 
 class CalibrationError(RuntimeError):
@@ -45,13 +46,16 @@ class Check:
 
 @dataclasses.dataclass
 class NoiseReport:
-    """The noise model of a calibration: in use, measured in the raw data, implied by the fit, and where
-    each term came from (``"datasheet"``, ``"raw data"``, ``"fit"``, ``"not modelled"``)."""
+    """The noise model of a calibration: in use, measured in the raw data, implied by the fit, where
+    each term came from (``"datasheet"``, ``"raw data"``, ``"fit"``, ``"static data (restricted
+    likelihood)"``, ``"not modelled"``), and the bias instability the static data show for the sensors
+    without a datasheet value (sensor -> :class:`noise.wander.SensorWander`)."""
 
     model: SensorNoise
     raw: RawNoise | None = None
     fitted: SensorNoise | None = None
     sources: dict[str, str] = dataclasses.field(default_factory=dict)
+    bias_wander: dict[str, SensorWander] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass

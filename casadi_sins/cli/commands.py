@@ -13,6 +13,7 @@ import numpy as np
 from ..calibrate import calibrate
 from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
+from ..calibrate.wander import natural_size
 from ..core.earth import Site
 from ..core.text import one_line
 from ..core.version import software_versions
@@ -160,10 +161,14 @@ def cmd_calibrate(args) -> int:
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
           f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
-    if "not modelled" in (result.noise.sources.get("gyro_bias_instability"),
-                          result.noise.sources.get("accel_bias_instability")):
-        print("note: bias instability is not modelled (no --noise datasheet): the bias sigmas exclude a drift "
-              "slower than this recording can show")
+    for sensor, wander in result.noise.bias_wander.items():
+        if not wander.included:
+            bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"
+            seen = ("the static data's misfit taken for model mismatch" if wander.mismatch
+                    else "no significant wander in the static data")
+            print(f"note: bias instability is not modelled for the {'accelerometers' if sensor == 'accel' else 'gyros'} "
+                  f"(no --noise datasheet, {seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas "
+                  "exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
     return 0

@@ -169,9 +169,8 @@ class _Rows:
         self.duration = np.array([track.segment_duration[s] for s in segments])
         self.sway = np.array([np.broadcast_to(track.segment_sway.get(s, 0.0), (3,)) for s in segments]).reshape(-1, 3)
         self.h_gyro = np.zeros((self.k, 3, 6))
-        self.h_gyro[self.gyro, :, :3] = np.eye(3) / self.duration[:, None, None]
         for i, s in zip(self.gyro, segments):
-            self.h_gyro[i, :, 3:] = track.attitude[track.segment_mid_of[s]].T @ system.earth_cross
+            self.h_gyro[i] = system.gyro_mean_observation(track, s)
         self.residual_rows = np.array([obs.row + np.arange(3) for obs in observations], dtype=int).reshape(-1, 3)
 
     def noise(self, noise: SensorNoise) -> tuple[np.ndarray, np.ndarray]:

@@ -59,6 +59,7 @@ class NoiseSystem:
 
     def __init__(self, tracks: list[GroupTrack], gravity: float, earth_rate: np.ndarray):
         self.tracks = tracks
+        self.gravity, self.earth_rate = float(gravity), np.asarray(earth_rate, dtype=float)
         self.f_cross = skew(np.array([0.0, 0.0, gravity]))
         self.earth_cross = skew(np.asarray(earth_rate, dtype=float))
         self.rows = max((obs.row + 3 for t in tracks for obs in t.observations), default=0)
@@ -66,11 +67,11 @@ class NoiseSystem:
     # ------------------------------------------------------------------ discretisation
     def transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
         """``Phi`` (M, n, n) and ``Q`` (M, n, n) of every step (exact for a constant attitude in the step)."""
-        phi, markov = self._transitions(track, noise, layout)
+        phi = self.step_transitions(track, noise, layout)
         q = self._white(track, layout, noise.gyro_arw**2, noise.accel_vrw**2)
-        for variance, unit in zip(self._markov_variances(noise, layout), markov):
-            if variance:
-                q += variance * unit
+        for variance, block in zip(self._markov_variances(noise, layout), self._markov_blocks(noise, layout)):
+            if variance:  # a bias without instability (the other sensor's datasheet gives one) adds nothing
+                q += variance * self._gauss_markov(track, layout, *block)
         return phi, q
 
     def covariance_terms(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
@@ -81,21 +82,31 @@ class NoiseSystem:
         the gyro's and the accelerometer's instability^2; the transitions depend on the correlation times
         only, so a likelihood search over the levels reuses them (:mod:`noise.filter`).
         """
-        phi, markov = self._transitions(track, noise, layout)
+        phi = self.step_transitions(track, noise, layout)
+        markov = [self._gauss_markov(track, layout, *block) for block in self._markov_blocks(noise, layout)]
         zero = np.zeros(3)
         units = [self._white(track, layout, axis_shape(noise.gyro_arw) ** 2, zero),
                  self._white(track, layout, zero, axis_shape(noise.accel_vrw) ** 2)]
         return phi, list(zip(self.term_variances(noise, layout), units + markov))
 
-    def _transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):
-        """``Phi`` of every step, and the biases' unit covariances (gyro, accelerometer) when in the layout."""
+    def step_transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout) -> np.ndarray:
+        """``Phi`` (M, n, n) of every step alone, without its covariance (with ``bias_tau = inf`` the
+        biases are held constant: the responses of :mod:`noise.pieces`)."""
         n, h = layout.n, track.step_dt
         phi = np.tile(np.eye(n), (len(h), 1, 1))
         phi[:, PHI, PHI] -= self.earth_cross[None] * h[:, None, None]
         phi[:, DV, PHI] = self.f_cross[None] * h[:, None, None]
         if layout.unmodelled:  # unmodelled acceleration: constant within a static segment
             phi[:, DV, layout.ua] = np.eye(3) * (h * track.static)[:, None, None]
-        return phi, (self._gauss_markov(phi, track, noise, layout) if layout.markov else [])
+        for sensor, sl, tau in self._markov_blocks(noise, layout):
+            phi[:, :, sl] = self._bias_input(track, sensor, sl, h, tau, n)
+        return phi
+
+    def gyro_mean_observation(self, track: GroupTrack, segment: int) -> np.ndarray:
+        """``H`` (3, 6) of a static segment's gyro mean on its gyro angle and middle attitude error:
+        ``a / T + C_mid^T [w_ie x] phi_mid``."""
+        return np.hstack([np.eye(3) / track.segment_duration[segment],
+                          track.attitude[track.segment_mid_of[segment]].T @ self.earth_cross])
 
     def _white(self, track: GroupTrack, layout: Layout, gyro_variance, accel_variance) -> np.ndarray:
         """The white noise's covariance over each step (M, n, n) for per-axis variances (ARW^2, VRW^2).
@@ -134,34 +145,37 @@ class NoiseSystem:
             return []
         return [float(noise.gyro_bias_instability) ** 2, float(noise.accel_bias_instability) ** 2]
 
-    def _gauss_markov(self, phi: np.ndarray, track: GroupTrack, noise: SensorNoise, layout: Layout):
-        """The biases' part of the transitions (in ``phi``), and their unit covariances (gyro, accelerometer)."""
-        n, h, c, m, eye3 = layout.n, track.step_dt, track.attitude, len(track.step_dt), np.eye(3)
-        units = []
-        for sensor, sl, tau in (("gyro", layout.bg, noise.gyro_bias_tau), ("accel", layout.ba, noise.accel_bias_tau)):
-            beta, gamma1, gamma2 = gauss_markov_integrals(h, tau)
-            phi[:, sl, sl] = eye3 * beta[:, None, None]
-            if sensor == "gyro":
-                phi[:, PHI, sl] = -c * gamma1[:, None, None]
-                phi[:, ACC, sl] = eye3 * gamma1[:, None, None]
-                phi[:, DV, sl] = -(self.f_cross @ c) * gamma2[:, None, None]
-            else:
-                phi[:, DV, sl] = c * gamma1[:, None, None]
-            # Q = (2 sigma^2 / tau) int_0^h Phi(u) G Phi(u)^T... du by 6-point Gauss-Legendre (smooth integrand)
-            unit = np.zeros((m, n, n))
-            for x, wgt in zip(_GAUSS_X, _GAUSS_W):
-                bu, g1, g2 = gauss_markov_integrals(h * (1.0 + x) / 2.0, tau)
-                col = np.zeros((m, n, 3))
-                col[:, sl] = eye3 * bu[:, None, None]
-                if sensor == "gyro":
-                    col[:, PHI] = -c * g1[:, None, None]
-                    col[:, ACC] = eye3 * g1[:, None, None]
-                    col[:, DV] = -(self.f_cross @ c) * g2[:, None, None]
-                else:
-                    col[:, DV] = c * g1[:, None, None]
-                unit += (2.0 / tau) * (wgt * h / 2.0)[:, None, None] * (col @ np.swapaxes(col, 1, 2))
-            units.append(unit)
-        return units
+    @staticmethod
+    def _markov_blocks(noise: SensorNoise, layout: Layout) -> list[tuple[str, slice, float]]:
+        """``(sensor, states, correlation time)`` of the Gauss-Markov biases in the layout (gyro, accelerometer)."""
+        if not layout.markov:
+            return []
+        return [("gyro", layout.bg, noise.gyro_bias_tau), ("accel", layout.ba, noise.accel_bias_tau)]
+
+    def _bias_input(self, track: GroupTrack, sensor: str, sl: slice, h, tau: float, n: int) -> np.ndarray:
+        """How a Gauss-Markov bias held over ``h`` (M,) seconds from its value moves the states, ``(M, n, 3)``:
+        ``beta`` on itself, through ``gamma1`` the gyro's angle (attitude and segment angle) or the
+        accelerometer's velocity, through ``gamma2`` the gyro's tilt into velocity."""
+        beta, gamma1, gamma2 = gauss_markov_integrals(h, tau)
+        c, col = track.attitude, np.zeros((len(h), n, 3))
+        col[:, sl] = np.eye(3) * beta[:, None, None]
+        if sensor == "gyro":
+            col[:, PHI] = -c * gamma1[:, None, None]
+            col[:, ACC] = np.eye(3) * gamma1[:, None, None]
+            col[:, DV] = -(self.f_cross @ c) * gamma2[:, None, None]
+        else:
+            col[:, DV] = c * gamma1[:, None, None]
+        return col
+
+    def _gauss_markov(self, track: GroupTrack, layout: Layout, sensor: str, sl: slice, tau: float) -> np.ndarray:
+        """A bias' unit covariance over each step (M, n, n): ``Q = (2 / tau) int_0^h Phi(u) G Phi(u)^T du`` by
+        6-point Gauss-Legendre (a smooth integrand)."""
+        h = track.step_dt
+        unit = np.zeros((len(h), layout.n, layout.n))
+        for x, wgt in zip(_GAUSS_X, _GAUSS_W):
+            col = self._bias_input(track, sensor, sl, h * (1.0 + x) / 2.0, tau, layout.n)
+            unit += (2.0 / tau) * (wgt * h / 2.0)[:, None, None] * (col @ np.swapaxes(col, 1, 2))
+        return unit
 
     # ------------------------------------------------------------------ the filter
     def whiten(self, columns: np.ndarray, noise: SensorNoise) -> Whitened:

@@ -79,8 +79,12 @@ def gauss_markov_integrals(h, tau: float):
 
     Returns ``(beta, gamma1, gamma2)``: ``beta = exp(-h / tau)`` carries the bias, ``gamma1 =
     int_0^h beta(s) ds`` is the angle (or velocity) it adds, ``gamma2 = int_0^h gamma1(s) ds`` what
-    that adds through a further integration (a tilt into velocity).
+    that adds through a further integration (a tilt into velocity).  ``tau = inf``: a bias held
+    constant, ``(1, h, h^2 / 2)``.
     """
+    if np.isinf(tau):
+        h = np.asarray(h, dtype=float)
+        return np.ones_like(h), h.copy(), h**2 / 2.0
     beta = np.exp(-h / tau)
     gamma1 = tau * (1.0 - beta)
     return beta, gamma1, tau * (h - gamma1)

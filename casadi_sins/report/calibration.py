@@ -23,6 +23,7 @@ import pandas as pd
 
 from ..core.version import __version__, software_versions
 from ..calibrate.result import CalibrationResult
+from ..calibrate.wander import INCLUDE_LR
 from ..core.units import DEG_PER_H, UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
@@ -101,6 +102,17 @@ def _noise_dict(noise: SensorNoise | None) -> dict | None:
     return out
 
 
+def _wander_dict(wander: dict) -> dict | None:
+    """The bias instability the static data show (:mod:`calibrate.wander`), per sensor in natural units (ug,
+    deg/h); ``upper`` ``None`` when the data do not bound it."""
+    if not wander:
+        return None
+    unit = {"accel": UG, "gyro": DEG_PER_H}
+    return {s: {"sigma": w.sigma / unit[s], "upper": w.upper / unit[s] if math.isfinite(w.upper) else None,
+                "lr": w.lr, "lr_threshold": INCLUDE_LR[s], "tau_s": w.tau, "included": bool(w.included),
+                "mismatch": bool(w.mismatch)} for s, w in wander.items()}
+
+
 def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None, command: str | None = None,
                 unit_id: str | None = None) -> dict:
     """Everything of the report as plain data (the JSON file)."""
@@ -136,7 +148,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
                   "raw": _noise_dict(raw.model().merged(raw.upper_bounds()) if raw is not None else None),
                   "raw_determined": ({s: [t.determined for t in raw.white[s]] for s in raw.white}
                                      if raw is not None else None),
-                  "sources": dict(result.noise.sources)},
+                  "sources": dict(result.noise.sources), "bias_wander": _wander_dict(result.noise.bias_wander)},
         "base_motion": [{"segment": m.segment, "amplitude_arcsec": m.amplitude_arcsec,
                          "period_s": None if not np.isfinite(m.period_s) else m.period_s,
                          "significant": m.significant} for m in motion],
@@ -196,12 +208,8 @@ def report_markdown(data: dict) -> str:
         if noise.get("sources"):
             lines += ["", "Where each term of the model comes from: "
                       + ", ".join(f"{k} {v}" for k, v in noise["sources"].items()) + "."]
-        sources = noise.get("sources") or {}
-        if sources.get("gyro_bias_instability") == "not modelled" or sources.get("accel_bias_instability") == \
-                "not modelled":
-            lines += ["", "Bias instability is not modelled: no datasheet value was given, and a recording of "
-                      f"{rec['samples'] / rec['rate_hz'] / 60:.0f} min cannot show a drift with a correlation time of "
-                      "minutes. The sigma of the biases excludes it: give the datasheet (`--noise`)."]
+        for sensor, wander in (noise.get("bias_wander") or {}).items():
+            lines += ["", _wander_sentence(sensor, wander)]
         model = noise["model"]
         if model and (model["unmodelled_acceleration_ug"] or model["unmodelled_rate_deg_h"]):
             lines += ["", f"Errors outside the model, added to it: {model['unmodelled_acceleration_ug']:.3g} ug "
@@ -219,6 +227,24 @@ def report_markdown(data: dict) -> str:
     if moving:
         lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
     return "\n".join(lines) + "\n"
+
+
+def _wander_sentence(sensor: str, v: dict) -> str:
+    """One sentence on a sensor's bias instability without a datasheet: modelled from the static data, or not
+    and how large it could be."""
+    unit, name = ("ug", "accelerometers") if sensor == "accel" else ("deg/h", "gyros")
+    if v["included"]:
+        return (f"Bias instability of the {name} from the static data (no datasheet): {v['sigma']:.3g} {unit}, "
+                f"Gauss-Markov with an assumed correlation time of {v['tau_s']:.0f} s (half the recording), likelihood "
+                f"ratio {v['lr']:.3g} against none; the bias sigmas include it.")
+    bound = (f"95 % upper bound {v['upper']:.3g} {unit}" if v["upper"] is not None else "not bounded by the data")
+    seen = (f"what the static data show of a wander (likelihood ratio {v['lr']:.3g}) is explained better by an "
+            "acceleration in each static segment: a model mismatch, left to the checks" if v["mismatch"] else
+            f"the static data show no wander beyond the white noise (likelihood ratio {v['lr']:.3g} against none, "
+            f"threshold {v['lr_threshold']:.3g})")
+    return (f"Bias instability is not modelled for the {name}: no datasheet value was given and {seen}; {bound} at "
+            f"a correlation time of {v['tau_s']:.0f} s. The sigma of the biases excludes an instability below that "
+            "bound, and any part of it constant over the recording: give the datasheet (`--noise`).")
 
 
 def _model_lines(model: dict | None) -> list[str]:

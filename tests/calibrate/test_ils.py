@@ -26,6 +26,7 @@ def ils_result(kang_ils):
 
 def test_converges_within_five_iterations_to_the_truth(ils_result, kang_sim):
     assert ils_result.success and ils_result.nit <= 5
+    assert not any(w.included for w in ils_result.noise.bias_wander.values())  # white noise only (issue 16)
     err = natural_errors(ils_result.parameters.values, kang_sim.truth.values)
     for i, name in enumerate(R.NAMES):
         assert abs(err[i]) < TOLERANCE[R.NATURAL_UNITS[i]], (name, err[i])

@@ -13,7 +13,7 @@ import pytest
 from casadi_sins.calibrate import CalibrationError, calibrate_ils, calibrate_nlp
 from casadi_sins.cli import main
 from casadi_sins.core import rotations
-from casadi_sins.core.units import ARCSEC
+from casadi_sins.core.units import ARCSEC, UG
 from casadi_sins.data.description import write_recording
 from casadi_sins.data.tables import read_table, write_table
 from casadi_sins.model import registry as R
@@ -43,6 +43,9 @@ def test_recovers_the_truth_with_honest_sigma(nlp_result, kang_sim):
     assert np.abs(z).max() < 4.5
     assert 0.6 < np.sqrt(np.mean(z**2)) < 1.5
     assert nlp_result.nlp.rotation_steps_used and not nlp_result.warnings
+    # white noise only: no bias instability read into it (issue 16), and the report bounds it
+    assert not any(w.included for w in nlp_result.noise.bias_wander.values())
+    assert set(nlp_result.noise.bias_wander) == {"accel", "gyro"}
     # the noise levels estimated from the fit are the simulated ones
     assert nlp_result.nlp.white_noise_per_sample["accel_noise_ug"] == pytest.approx(50.0, rel=0.05)
     assert nlp_result.nlp.white_noise_per_sample["gyro_noise_deg_h"] == pytest.approx(0.01, rel=0.5)
@@ -163,3 +166,26 @@ def test_a_swaying_base_is_named_and_the_sigma_covers_the_errors(kang_problem):
     assert np.abs(err / result.parameters.natural_sigma()).max() < 4.5
     with pytest.raises(CalibrationError, match=r"the base moved \(sway\).*use the nlp solver"):
         calibrate_ils(sim.recording)
+
+
+NAVIGATION_GRADE_DRIFTING = dict(REALISTIC, quantize=True, gyro_bias_instability_deg_h=0.002, gyro_bias_tau_s=600.0,
+                                 accel_bias_instability_ug=3.0, accel_bias_tau_s=900.0)
+
+
+def test_bias_instability_without_a_datasheet_is_measured_and_named(kang_problem):
+    """Issue 16: navigation-grade noise with a Gauss-Markov bias instability (3 ug at 900 s), no datasheet.  The static
+    data show the wander; it enters the noise model, the accelerometer bias sigma covers the error, and the warning
+    names the size and the assumed correlation time and asks for the datasheet.  (The paper's world, white noise
+    only, includes nothing: test_recovers_the_truth_with_honest_sigma.)"""
+    timing = dataclasses.replace(kang_problem.timing, static_s=150.0)
+    problem = dataclasses.replace(kang_problem.with_changes(**NAVIGATION_GRADE_DRIFTING), rate_hz=200.0, timing=timing)
+    sim = simulate(problem, seed=20006)
+    result = calibrate_nlp(sim.recording)
+    wander = result.noise.bias_wander["accel"]
+    assert wander.included and 1.0 < wander.sigma / UG < wander.upper / UG < 20.0
+    assert wander.tau == pytest.approx(0.5 * (sim.recording.time[-1] - sim.recording.time[0] + sim.recording.dt))
+    assert result.noise.sources["accel_bias_instability"].startswith("static data")
+    assert result.noise.model.accel_bias_instability == wander.sigma
+    assert any("bias instability" in w and f"{wander.tau:.0f} s" in w and "datasheet" in w for w in result.warnings)
+    z = natural_errors(result.parameters.values, sim.truth.values) / result.parameters.natural_sigma()
+    assert np.abs(z[:3]).max() < 3.5

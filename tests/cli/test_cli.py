@@ -60,4 +60,7 @@ def test_calibrate_writes_the_table_with_its_report_and_strict_refuses_on_a_warn
     assert "WARNING" in printed.err
     assert "bias instability is not modelled" in printed.out  # no datasheet: said on screen and in the report
     assert "Bias instability is not modelled" in (tmp_path / "out" / "params.report.md").read_text()
+    wander = report["noise"]["bias_wander"]  # issue 16: what the static data show, per sensor, in natural units
+    assert set(wander) == {"accel", "gyro"} and not any(w["included"] for w in wander.values())
+    assert 0.0 < wander["accel"]["upper"] < 10.0 and wander["accel"]["tau_s"] > 300.0  # ug, s
     assert read_table(out).sigma is not None

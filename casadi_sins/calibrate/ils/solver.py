@@ -47,8 +47,10 @@ from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
 from ..limits import factor_limit, factor_low, separation_warnings
 from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
+from ..wander import describe, record, with_wander
 from .covariance import equation_covariance
 from .equations import build_equations, solve_equations
+from .wander import equation_bias_wander
 
 #: Corrections below these (natural units: ug, ppm, arcsec, deg/h) end the iteration regardless of sigma.
 ABSOLUTE_TOLERANCE = np.where(np.isin(np.array(NATURAL_UNITS), ["deg/h"]), 1e-5, 1e-3)
@@ -130,6 +132,16 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     else:
         raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
+    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, covariance,
+                                         north_quadratic)
+    if total is not None:  # the last solve again, under the equations' covariance with the wander
+        x, cov, factor = solve_equations(a, b, total)
+        params = apply_error_estimate(history[-2], x)
+        history[-1] = params.copy()
+        corrections[-1] = x / NATURAL_SCALE
+        record(noise_plan, wander)
+        if describe(wander):
+            warnings.append(describe(wander))
     dof = len(b) - N_PARAMS
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
@@ -137,7 +149,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
                              float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
-                             inflate, NoiseReport(noise_plan.model, noise_plan.raw, None, dict(noise_plan.source)),
+                             inflate, NoiseReport(with_wander(noise_plan.model, wander) or noise_plan.model,
+                                                  noise_plan.raw, None, dict(noise_plan.source), wander),
                              noise_plan.motions,
                              ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
 

@@ -7,6 +7,8 @@
 3. :func:`_fit_model`: Ipopt and the generalised least squares (:mod:`.gls`); the velocity steps
    across rotations are dropped when they disagree with the static residuals; ``model="auto"``
    keeps the extra groups the data support (:mod:`.selection`).
+   :func:`_bias_wander`: without a datasheet's bias instability, the wander the static data show
+   (:mod:`.wander`); an included term enters the noise model and the solve is repeated under it.
 4. :func:`_assess`: the checks (:mod:`.diagnostics`); when the residuals exceed the noise model, the
    errors outside it are estimated (:mod:`.likelihood`) and the solve is repeated with them.
 5. :func:`_result`: the parameter table, its covariance and the report's contents.
@@ -32,12 +34,14 @@ from ..initial import rough_parameters
 from ..limits import separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
+from ..wander import describe, natural_size, record, with_wander
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
 from .ipopt import quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import model_groups, model_label, select_groups, unobservable_group
+from .wander import estimate_bias_wander
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
                  "W from the noise model (raw-data estimate, datasheet, fit), times the variance factor when "
@@ -63,6 +67,7 @@ class _Run:
     noise_s: float
     built: list[ResidualGraph] = dataclasses.field(default_factory=list)
     selection: dict | None = None
+    wander: dict = dataclasses.field(default_factory=dict)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -136,6 +141,7 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
                    {"hessian": hessian, "tolerance": tolerance, "max_iterations": max_iterations})
     graph = _observable_graph(run)
     graph, fit = _fit_model(run, graph, use_rotation_steps)
+    fit = _bias_wander(run, graph, fit)
     graph_s = sum(g.build_time for g in run.built)
     timings = {"noise from the raw data": run.noise_s, "graph": graph_s,
                "ipopt and generalised least squares": time.perf_counter() - run.t_start - graph_s - run.noise_s}
@@ -224,6 +230,30 @@ def _select(run: _Run, graph: ResidualGraph, fit: Fit, mode: bool) -> tuple[Resi
     return graph, fit
 
 
+def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
+    """Stage 3b: the bias instability the static data show when no datasheet gives it; an included term
+    enters the noise model (Gauss-Markov states in the filter) and the solve is repeated under it."""
+    run.wander = estimate_bias_wander(run.rec, fit, run.noise_plan)
+    model = with_wander(fit.noise, run.wander)
+    for sensor, wander in run.wander.items():
+        run.say(f"bias instability of the {sensor} from the static data: {natural_size(sensor, wander.sigma)} "
+                f"at {wander.tau:.0f} s (likelihood ratio "
+                f"{wander.lr:.3g}, {'included' if wander.included else 'not included'}"
+                f"{', taken for model mismatch' if wander.mismatch else ''})")
+    if model is None:
+        return fit
+    stats = fit.ipopt_stats
+    fit = generalised_least_squares(run.rec, graph, run.noise_plan, model, fit.z, fit.use_rotation_steps,
+                                    run.progress, update_free=False)
+    fit.ipopt_stats = stats
+    record(run.noise_plan, run.wander)
+    message = describe(run.wander)
+    if message:
+        run.warnings.append(message)
+        run.say(f"warning: {message}")
+    return fit
+
+
 def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]:
     """Stage 4: the checks; errors outside the model get a place in it and the solve is repeated."""
     assessment = assess(graph, fit, run.noise_plan)
@@ -288,7 +318,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
         int(stats["iter_count"]), run.initial, [reference, values],
         float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
         warnings, assessment.checks, assessment.variance_factor,
-        NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source)),
+        NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source), run.wander),
         run.noise_plan.motions, timings, nlp=details)
 
 

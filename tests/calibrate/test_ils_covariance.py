@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from casadi_sins.calibrate.ils.covariance import equation_covariance
+from casadi_sins.calibrate.ils.covariance import equation_covariance, equation_covariances
 from casadi_sins.calibrate.ils.equations import Equation, build_equations, coefficient_operator, equation_segments
 from casadi_sins.calibrate.initial import rough_parameters
 from casadi_sins.calibrate.steps import ROTATION_STEP_S, GroupSteps, group_track, plan_steps
@@ -186,3 +186,22 @@ def test_exact_covariance_equals_a_monte_carlo_of_the_same_model(equations, term
                else dict(accel_vrw=model.accel_vrw * 0.9))
     without = equation_covariance(rec, params, navs, eqs, dataclasses.replace(model, **smaller))
     assert np.max(np.abs(np.diag(drawn) / np.diag(without) - 1.0)) > 4.5 * np.sqrt(2.0 / DRAWS)
+
+
+def test_several_noise_models_share_one_pass_and_independent_sources_add(equations):
+    """One propagation for several noise models with the same transitions (the ILS's unit instabilities):
+    each equals its own pass, and the covariances of independent sources add up to that of both together."""
+    rec, params, eqs, navs, model = equations
+    quiet = dict(gyro_arw=np.zeros(3), accel_vrw=np.zeros(3), gyro_quantization=np.zeros(3),
+                 accel_quantization=np.zeros(3), gyro_bias_tau=400.0, accel_bias_tau=400.0)
+    gyro = dataclasses.replace(model, **quiet, gyro_bias_instability=1e-9, accel_bias_instability=0.0)
+    accel = dataclasses.replace(model, **quiet, gyro_bias_instability=0.0, accel_bias_instability=5e-6)
+    both = dataclasses.replace(model, **quiet, gyro_bias_instability=1e-9, accel_bias_instability=5e-6)
+    joint = equation_covariances(rec, params, navs, eqs, [gyro, accel])
+    alone = [equation_covariance(rec, params, navs, eqs, m) for m in (gyro, accel)]
+    scale = np.abs(joint).max()
+    assert np.abs(joint - np.stack(alone)).max() <= 1e-12 * scale
+    assert np.abs(joint.sum(axis=0) - equation_covariance(rec, params, navs, eqs, both)).max() <= 1e-10 * scale
+    assert np.abs(alone[0]).max() > 0 and np.abs(alone[1]).max() > 0
+    with pytest.raises(ValueError, match="different transitions"):
+        equation_covariances(rec, params, navs, eqs, [gyro, dataclasses.replace(accel, accel_bias_tau=100.0)])

@@ -41,6 +41,9 @@ from .equations import Equation, coefficient_operator, equation_segments
 class LinearModel:
     """``x_t = A_t x_(t-1) + w_t`` with ``w_t ~ N(0, Q_t)``, and linear functionals ``c = sum_t G_t x_t``.
 
+    Several noise models with the same transitions (``Q_t`` given as one array per model, stacked) share
+    one backward pass: ``Cov(c)`` for each.
+
     Parameters
     ----------
     n : int
@@ -52,25 +55,26 @@ class LinearModel:
     def __init__(self, n: int, n_functionals: int):
         self.n, self.n_functionals = n, n_functionals
         self.a: list[np.ndarray] = []
-        self.q: list[np.ndarray] = []
+        self.q: list[np.ndarray] = []  # (models, n, n) per step
         self.g: list[np.ndarray] = []
 
     def step(self, a: np.ndarray, q: np.ndarray) -> int:
-        """Append a step; its index ``t``."""
+        """Append a step (``q`` (n, n), or (models, n, n)); its index ``t``."""
         self.a.append(a)
-        self.q.append(q)
+        self.q.append(q if q.ndim == 3 else q[None])
         self.g.append(np.zeros((self.n_functionals, self.n)))
         return len(self.a) - 1
 
     def covariance(self) -> np.ndarray:
-        """``Cov(c)`` by one backward pass (module docstring)."""
-        cov = np.zeros((self.n_functionals, self.n_functionals))
+        """``Cov(c)`` (models, m, m) by one backward pass (module docstring)."""
+        models = self.q[0].shape[0] if self.q else 1
+        cov = np.zeros((models, self.n_functionals, self.n_functionals))
         h = np.zeros((self.n_functionals, self.n))
         for t in range(len(self.a) - 1, -1, -1):
             h = self.g[t] + (h @ self.a[t + 1] if t + 1 < len(self.a) else 0.0)
             if self.q[t].any():
                 cov += h @ self.q[t] @ h.T
-        return 0.5 * (cov + cov.T)
+        return 0.5 * (cov + np.swapaxes(cov, 1, 2))
 
 
 class _GroupSteps:
@@ -86,22 +90,36 @@ class _GroupSteps:
 def equation_covariance(rec: Recording, params: np.ndarray, navs: list[GroupNavigation], equations: list[Equation],
                         noise: SensorNoise, north_quadratic: bool = True) -> np.ndarray:
     """Covariance (m, m) of the equations' right-hand sides under the sensor noise model (module docstring)."""
-    model_noise = noise.complete()
+    return equation_covariances(rec, params, navs, equations, [noise], north_quadratic)[0]
+
+
+def equation_covariances(rec: Recording, params: np.ndarray, navs: list[GroupNavigation], equations: list[Equation],
+                         noises: list[SensorNoise], north_quadratic: bool = True) -> np.ndarray:
+    """The equations' covariance (models, m, m) under each of several noise models in one pass.
+
+    The models must share their transitions (the same state layout and correlation times: e.g. unit
+    instabilities of each sensor); their step covariances are propagated side by side.
+    """
+    completed = [n.complete() for n in noises]
+    model_noise = completed[0]
     layout = Layout.of(model_noise)
+    if any(Layout.of(n) != layout or (layout.markov and (n.gyro_bias_tau, n.accel_bias_tau) != (
+            model_noise.gyro_bias_tau, model_noise.accel_bias_tau)) for n in completed[1:]):
+        raise ValueError("noise models with different transitions cannot share one covariance pass")
     model = LinearModel(layout.n, len(equations))
     by_group: dict[int, list[int]] = {}
     for i, eq in enumerate(equations):
         by_group.setdefault(eq.group, []).append(i)
     previous_end = None
-    remainders = np.zeros((len(equations), len(equations)))
+    remainders = np.zeros((len(completed), len(equations), len(equations)))
     for nav in navs:
         plan = plan_steps(rec, nav.group, 1.0, ROTATION_STEP_S)
         stops = np.cumsum(np.round(plan.step_dt / rec.dt).astype(int)) - 1
         track = group_track(plan, [], nav.initial_attitude, nav.quaternion[stops].T, True)
         system = NoiseSystem([track], rec.site.g, rec.site.earth_rate)
-        start = _group_start(model, layout, model_noise, float(plan.start_time), previous_end)
+        start = _group_start(model, layout, completed, float(plan.start_time), previous_end)
         first_seg = rec.group_segments(nav.group)[0].number
-        steps = _propagate(model, system, track, plan, layout, model_noise, first_seg, start)
+        steps = _propagate(model, system, track, plan, layout, completed, first_seg, start)
         alignment, m_align, duration = _alignment_functional(rec, params, nav, system, track, plan, steps, layout,
                                                              first_seg)
         rows = by_group.get(nav.group, [])
@@ -110,8 +128,8 @@ def equation_covariance(rec: Recording, params: np.ndarray, navs: list[GroupNavi
         for seg, axes in equation_segments(rec, nav.group, with_alignment):
             _segment_functionals(model, plan, steps, alignment, seg, axes, rows, equations, nav.group,
                                  north_quadratic, to_alignment)
-        phi0 = alignment_remainders(m_align, duration, model_noise)
-        remainders += to_alignment @ phi0 @ to_alignment.T
+        for k, noise_k in enumerate(completed):
+            remainders[k] += to_alignment @ alignment_remainders(m_align, duration, noise_k) @ to_alignment.T
         previous_end = float(plan.start_time + plan.step_dt.sum())
     return model.covariance() + remainders
 
@@ -127,32 +145,35 @@ def alignment_remainders(m_align: np.ndarray, duration: float, noise: SensorNois
     return (m_align * variance) @ m_align.T
 
 
-def _group_start(model: LinearModel, layout: Layout, noise: SensorNoise, start: float, previous_end: float | None
-                 ) -> int:
+def _group_start(model: LinearModel, layout: Layout, noises: list[SensorNoise], start: float,
+                 previous_end: float | None) -> int:
     """The state at a group's start: zero, but for the biases, which wander on from the previous group (one
     Gauss-Markov process over the recording)."""
-    a, q = np.zeros((layout.n, layout.n)), np.zeros((layout.n, layout.n))
+    a, q = np.zeros((layout.n, layout.n)), np.zeros((len(noises), layout.n, layout.n))
     if layout.markov:
-        for sl, sigma, tau in ((layout.bg, noise.gyro_bias_instability, noise.gyro_bias_tau),
-                               (layout.ba, noise.accel_bias_instability, noise.accel_bias_tau)):
-            beta = gauss_markov_integrals(max(start - previous_end, 0.0), tau)[0] if previous_end is not None else 0.0
-            a[sl, sl] = np.eye(3) * beta
-            q[sl, sl] = np.eye(3) * sigma**2 * (1.0 - beta**2)
+        for k, noise in enumerate(noises):
+            for sl, sigma, tau in ((layout.bg, noise.gyro_bias_instability, noise.gyro_bias_tau),
+                                   (layout.ba, noise.accel_bias_instability, noise.accel_bias_tau)):
+                beta = (gauss_markov_integrals(max(start - previous_end, 0.0), tau)[0] if previous_end is not None
+                        else 0.0)
+                a[sl, sl] = np.eye(3) * beta
+                q[k, sl, sl] = np.eye(3) * sigma**2 * (1.0 - beta**2)
     return model.step(a, q)
 
 
-def _propagate(model: LinearModel, system: NoiseSystem, track, plan: GroupSteps, layout: Layout, noise: SensorNoise,
-               first_seg: int, start: int) -> _GroupSteps:
+def _propagate(model: LinearModel, system: NoiseSystem, track, plan: GroupSteps, layout: Layout,
+               noises: list[SensorNoise], first_seg: int, start: int) -> _GroupSteps:
     """A group's steps into the model: each static step, and the rotation before it as one transition."""
     n = layout.n
-    phi, q = system.transitions(track, noise, layout)
+    phi, q0 = system.transitions(track, noises[0], layout)
+    q = np.stack([q0] + [system.transitions(track, noise, layout)[1] for noise in noises[1:]], axis=1)  # (M, K, n, n)
     restart = np.eye(n)
     restart[ACC, ACC] = 0.0  # a static segment's gyro angle restarts
     response = np.zeros((n, 3))
     response[PHI] = np.eye(3)
     out = _GroupSteps(len(plan.step_dt))
     static = plan.step_segment >= 0
-    phi_run, q_run = np.eye(n), np.zeros((n, n))
+    phi_run, q_run = np.eye(n), np.zeros(q.shape[1:])
     previous = start
     for k in range(len(plan.step_dt)):
         if not static[k]:
@@ -162,7 +183,7 @@ def _propagate(model: LinearModel, system: NoiseSystem, track, plan: GroupSteps,
         if q_run.any():
             previous = model.step(phi_run, q_run)
             response = phi_run @ response
-            phi_run, q_run = np.eye(n), np.zeros((n, n))
+            phi_run, q_run = np.eye(n), np.zeros(q.shape[1:])
         t = model.step(phi[k] @ restart if plan.segment_start[k] else phi[k], q[k])
         response = phi[k] @ response
         out.index[k], out.v_align[k] = t, response[DV]

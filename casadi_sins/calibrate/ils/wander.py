@@ -18,7 +18,7 @@ from ...model.registry import NATURAL_SCALE
 from ...noise.plan import NoisePlan
 from ...noise.wander import BiasWander, SensorWander
 from ..wander import decide, unknown_sensors, wander_tau
-from .covariance import equation_covariance
+from .covariance import equation_covariances
 
 
 def unit_instability(sensor: str, tau: float) -> SensorNoise:
@@ -40,8 +40,8 @@ def equation_bias_wander(rec: Recording, params: np.ndarray, navs, equations, no
     if not sensors:
         return {}, None
     tau = wander_tau(rec)
-    units = {s: equation_covariance(rec, params, navs, equations, unit_instability(s, tau), north_quadratic)
-             for s in sensors}
+    units = dict(zip(sensors, equation_covariances(rec, params, navs, equations,
+                                                   [unit_instability(s, tau) for s in sensors], north_quadratic)))
     chol = np.linalg.cholesky(covariance)
     whiten = np.linalg.solve(chol, np.eye(len(chol)))
     units_w = {s: whiten @ u @ whiten.T for s, u in units.items()}

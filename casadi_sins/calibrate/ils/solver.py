@@ -121,10 +121,7 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
         ratio = np.abs(x) / np.where(sigma > 0, sigma, np.inf)
         corrections.append(x / NATURAL_SCALE)
         if progress:
-            worst = int(np.argmax(ratio))
-            progress(f"ils iteration {iteration}: {len(b)} equations, largest correction {NAMES[worst]} "
-                     f"{x[worst] / NATURAL_SCALE[worst]:+.4g} {NATURAL_UNITS[worst]} ({ratio[worst]:.3g} sigma), "
-                     f"variance factor {factor:.3g}")
+            progress(_iteration_line(iteration, len(b), x, ratio, factor))
         if not np.all(np.isfinite(params)):
             raise CalibrationError(f"iteration {iteration} produced non-finite parameters")
         if np.all((ratio < tolerance) | (np.abs(x) / NATURAL_SCALE < ABSOLUTE_TOLERANCE)):
@@ -132,16 +129,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     else:
         raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
-    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, covariance,
-                                         north_quadratic)
-    if total is not None:  # the last solve again, under the equations' covariance with the wander
-        x, cov, factor = solve_equations(a, b, total)
-        params = apply_error_estimate(history[-2], x)
-        history[-1] = params.copy()
-        corrections[-1] = x / NATURAL_SCALE
-        record(noise_plan, wander)
-        if describe(wander):
-            warnings.append(describe(wander))
+    wander, params, cov, factor = _last_solve_with_wander(rec, navs, equations, noise_plan, a, b, covariance,
+                                                          north_quadratic, history, corrections, cov, factor, warnings)
     dof = len(b) - N_PARAMS
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
@@ -153,6 +142,35 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
                                                   noise_plan.raw, None, dict(noise_plan.source), wander),
                              noise_plan.motions,
                              ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
+
+
+def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.ndarray, factor: float) -> str:
+    """One line of progress: the largest correction of an iteration in natural units and sigma."""
+    worst = int(np.argmax(ratio))
+    return (f"ils iteration {iteration}: {equations} equations, largest correction {NAMES[worst]} "
+            f"{x[worst] / NATURAL_SCALE[worst]:+.4g} {NATURAL_UNITS[worst]} ({ratio[worst]:.3g} sigma), "
+            f"variance factor {factor:.3g}")
+
+
+def _last_solve_with_wander(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.ndarray, b: np.ndarray,
+                            covariance: np.ndarray, north_quadratic: bool, history: list, corrections: list,
+                            cov: np.ndarray, factor: float, warnings: list[str]):
+    """The bias instability the equations show without a datasheet (:mod:`.wander`), linearised where the last
+    solve was.  When a term is included the last solve is made again under the equations' covariance with it
+    (``history`` and ``corrections`` updated, the noise plan records the terms, ``warnings`` gets the warning).
+    Returns ``(estimates, parameters, their covariance, variance factor)``."""
+    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, covariance,
+                                         north_quadratic)
+    if total is None:
+        return wander, history[-1], cov, factor
+    record(noise_plan, wander)
+    if describe(wander):
+        warnings.append(describe(wander))
+    x, cov, factor = solve_equations(a, b, total)
+    params = apply_error_estimate(history[-2], x)
+    history[-1] = params.copy()
+    corrections[-1] = x / NATURAL_SCALE
+    return wander, params, cov, factor
 
 
 def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str]

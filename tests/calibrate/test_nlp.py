@@ -70,8 +70,8 @@ def test_start_attitudes_are_estimated(nlp_result, kang_sim):
         assert np.abs(off).max() < 3.0  # arcsec; the rough alignment was off by up to ~0.5 deg in heading
 
 
-# values of the (B) column of ../shared/peer/psins-19pos/psins-19pos.extras.md: what the peer's extra error
-# terms do to a 21-parameter fit that ignores the velocity steps at the rotations
+# what the peer's extra error terms do to a 21-parameter fit that ignores the velocity steps at the rotations:
+# the values the peer's authors published with the recording (the 21 fitted without the extras, natural units)
 PEER_EXPECTED_B = [-6.0, -16.9, -21.0, 1.2, 0.3, 7.2, -1.6, 2.1, 3.9, 0.003, 0.003, -0.002,
                    -11.9, -6.6, 8.4, 1.3, -2.7, -0.4, -4.0, -0.1, 0.1]
 

@@ -4,7 +4,7 @@ Run: ``python benchmarks/bench_quantization.py [--runs 20] [--workers 2] [--out 
 runs on one core).  Writes ``results/quantization-montecarlo-runs.csv`` (every run and parameter) and
 ``quantization-montecarlo.{csv,md}``: per solver the range of RMS error / mean sigma over the 21 parameters, the
 joint chi-square of the 21 against the truth (``e^T C^-1 e``, 21 degrees of freedom: median, runs outside its
-99.9 % band 6.4-46.8), runs with warnings, and the raw-data estimate of the white noise against the simulated one.
+0.1 % and 99.9 % points 6.4-46.8), runs with warnings, and the raw-data estimate of the white noise against the simulated one.
 
 The world: the paper's schedule at 200 Hz with integer pulses of 144 per sample over white noise of 30 ug and
 0.02 deg/h per sample (0.004 pulse): the remainder is a thousand times the white noise in every sample.  No
@@ -34,7 +34,7 @@ from casadi_sins.sim import simulate
 from casadi_sins.studies.parallel import run_all
 
 COARSE = dict(accel_noise_ug=30.0, gyro_noise_deg_h=0.02, quantize=True)
-#: The 99.9 % band of a chi-square with 21 degrees of freedom.
+#: The 0.1 % and 99.9 % points of a chi-square with 21 degrees of freedom.
 CHI2_BAND = (6.4, 46.8)
 
 

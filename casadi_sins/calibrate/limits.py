@@ -30,12 +30,19 @@ def factor_low(dof: float) -> float:
     return max(0.0, 1.0 - Z_LIMIT * np.sqrt(2.0 / max(dof, 1.0)) - MODEL_TOLERANCE)
 
 
-def separation_warnings(params: ParameterSet) -> tuple[list[Check], list[str]]:
+def separation_warnings(params: ParameterSet, wander: dict | None = None) -> tuple[list[Check], list[str]]:
     """Checks and warnings of an estimate's separability: weak parameters, inseparable pairs, condition.
+
+    ``wander`` (sensor -> :class:`noise.wander.SensorWander`): the biases of a sensor whose bias instability
+    was included are not called weak, their sigma carries the wander's mean by design (its own warning
+    says so), not a schedule that cannot determine them.
 
     Returns ``(checks, warnings)``.
     """
     found = separation(params)
+    wandering = tuple(f"{sensor}_bias_" for sensor, w in (wander or {}).items() if w.included)
+    if wandering:
+        found.weak = [entry for entry in found.weak if not entry[0].startswith(wandering)]
     checks = [Check("parameters determined by the schedule", float(len(found.weak)), 0.0, not found.weak,
                     "parameters whose sigma exceeds about 1 % of what is known before calibration: "
                     + (", ".join(f"{n} {s:.3g} {u}" for n, s, u in found.weak) or "none")),

@@ -30,8 +30,8 @@ from ..model.noise import SensorNoise
 from ..noise.plan import NoisePlan
 from ..noise.wander import SensorWander
 
-#: Static segments are cut into pieces of at most PIECE_S seconds, and a recording into at most MAX_PIECES
-#: (the wander is slow against span / 40 anyway).  Pieces of 50, 75, 100 or 150 s give the restricted
+#: Static segments are cut into pieces of PIECE_S seconds, or span / MAX_PIECES when that is longer (the
+#: wander is slow against span / 40 anyway); every static segment has at least one piece.  Pieces of 50, 75, 100 or 150 s give the restricted
 #: likelihood within 1 in ln L of the exact one (the Kalman model with Gauss-Markov states) near its optimum,
 #: none of them closer on every recording, and 100 s pieces the same decisions as 50 s ones in 20
 #: navigation-grade recordings; 100 s keep a group of the paper's schedule within one compiled filter pass.

@@ -3,7 +3,8 @@
 Terms come from a datasheet when given, else from the raw data when they determine them, else from
 the fit (white noise hidden under coarse pulses, bounded by the raw data).  A counter's quantization
 is known: its integer pulses carry the remainder, one pulse / sqrt(12).  Bias instability comes
-from a datasheet only; without one the report says so.
+from a datasheet; without one the solvers measure the wander the static data show
+(:mod:`calibrate.wander`) and the report says what they found.
 """
 
 from __future__ import annotations

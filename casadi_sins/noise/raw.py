@@ -20,7 +20,8 @@ increments is bounded), so the white noise shows beneath pulses a thousand times
 blocks last seconds (:func:`white_beneath_quantization`).
 
 Bias instability with correlation times of minutes cannot be seen in segments of a minute or two: it
-comes from a datasheet or stays zero, which the report says.
+comes from a datasheet, or from the disagreement between the segments that the solvers measure
+(:mod:`calibrate.wander`).
 """
 
 from __future__ import annotations

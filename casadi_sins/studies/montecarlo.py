@@ -32,7 +32,7 @@ PAPER_ACCURACY = {
 
 
 def datasheet(problem: Problem):
-    """The sensor datasheet of a problem: its bias instability (which no recording of minutes can show)."""
+    """The sensor datasheet of a problem: its bias instability (what a recording of minutes shows of it only in part)."""
     dev = problem.deviations
     if not (dev.gyro_bias_instability_deg_h or dev.accel_bias_instability_ug):
         return None

@@ -10,7 +10,7 @@ from casadi_sins.calibrate import calibrate, calibrate_nlp
 from casadi_sins.core.units import ARW_UNIT
 from casadi_sins.data.problem import load_problem
 from casadi_sins.model.noise import SensorNoise
-from casadi_sins.model.parameters import separation
+from casadi_sins.model.parameters import ParameterSet, separation
 from casadi_sins.sim import simulate
 
 PROBLEMS = Path(__file__).resolve().parents[2] / "problems"
@@ -52,3 +52,39 @@ def test_a_datasheet_the_data_contradict_is_named_and_the_measured_noise_used(ka
 def test_checks_of_the_residuals_are_two_sided(kang_nlp):
     kinds = [c for c in kang_nlp.checks if c.name.endswith("residuals vs noise model")]
     assert len(kinds) == 2 and all(0.0 < c.low < 1.0 < c.limit and c.low <= c.value <= c.limit for c in kinds)
+
+
+def test_the_ils_takes_a_misfit_outside_the_model_for_no_bias_instability(peer_recording):
+    """The peer recording's lever arms, quadratic scale factor and time offset leave the 21-parameter ILS
+    with a misfit hundreds of times its noise.  An accelerometer offset per static segment explains it
+    better than a wander: no instability is included (it would hide the misfit behind a passing check), the
+    equations' check fails and the warning names errors outside the model."""
+    result = calibrate(peer_recording, solver="ils")
+    accel = result.noise.bias_wander["accel"]
+    assert accel.mismatch and not accel.included
+    assert result.noise.model.accel_bias_instability in (None, 0.0)
+    check = next(c for c in result.checks if c.name == "equations vs noise model")
+    assert not check.passed
+    assert any("errors outside the model" in w for w in result.warnings)
+    assert not any("bias instability" in w for w in result.warnings)
+
+
+def test_biases_whose_wander_is_included_are_not_blamed_on_the_schedule(kang_nlp):
+    """The sigma of a bias whose instability the static data show carries the wander's mean by design: the
+    separability check does not call it weak (the wander has its own warning), other weak parameters still
+    are."""
+    from casadi_sins.calibrate.limits import separation_warnings
+    from casadi_sins.noise.wander import SensorWander
+
+    params = kang_nlp.parameters
+    wide = params.covariance.copy()
+    wide[0, 0] *= 1e8  # accel_bias_x far beyond its weak level
+    wide[12, 12] *= 1e8  # gyro_scale_x likewise
+    weak = ParameterSet(params.values, covariance=wide, names=params.names)
+    wander = {"accel": SensorWander(2e-5, 30.0, 4e-5, 600.0, included=True)}
+    _, alone = separation_warnings(weak)
+    _, with_wander = separation_warnings(weak, wander)
+    assert "accel_bias_x" in alone[0] and "gyro_scale_x" in alone[0]
+    assert "accel_bias_x" not in with_wander[0] and "gyro_scale_x" in with_wander[0]
+    not_included = {"accel": SensorWander(2e-5, 1.0, 4e-5, 600.0, included=False)}
+    assert "accel_bias_x" in separation_warnings(weak, not_included)[1][0]

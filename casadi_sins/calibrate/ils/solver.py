@@ -59,7 +59,7 @@ ABSOLUTE_TOLERANCE = np.where(np.isin(np.array(NATURAL_UNITS), ["deg/h"]), 1e-5,
 MAX_GROUP_SAMPLES = 1_500_000
 
 SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
-                 "from the sensor noise model (raw-data estimate or datasheet), times the variance factor when "
+                 "from the sensor noise model (raw-data estimate, datasheet, bias wander of the static data), times the variance factor when "
                  "the residuals exceed it")
 
 
@@ -134,7 +134,7 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     dof = len(b) - N_PARAMS
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
-    checks = _checks(result, factor, len(b), noise_plan, warnings)
+    checks = _checks(result, factor, len(b), noise_plan, warnings, wander)
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
                              float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
@@ -173,15 +173,15 @@ def _last_solve_with_wander(rec: Recording, navs, equations, noise_plan: NoisePl
     return wander, params, cov, factor
 
 
-def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str]
-            ) -> list[Check]:
+def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str],
+            wander: dict) -> list[Check]:
     """The equations' chi-square (two-sided) and the separability checks; their warnings into ``warnings``."""
     dof = equations - N_PARAMS
     low, limit = factor_low(dof), factor_limit(dof)
     checks = [Check("equations vs noise model", factor, limit, low <= factor <= limit,
                     f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom), noise "
                     f"from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", low)]
-    separation_checks, separation_text = separation_warnings(result)
+    separation_checks, separation_text = separation_warnings(result, wander)
     warnings += noise_plan.warnings + separation_text
     return checks + separation_checks
 

@@ -44,7 +44,7 @@ from .selection import model_groups, model_label, select_groups, unobservable_gr
 from .wander import estimate_bias_wander
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
-                 "W from the noise model (raw-data estimate, datasheet, fit), times the variance factor when "
+                 "W from the noise model (raw-data estimate, datasheet, fit, bias wander of the static data), times the variance factor when "
                  "the residuals exceed the model")
 
 
@@ -301,7 +301,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
             f"VRW {_fmt(nat['accel_vrw_ug_rthz'])} ug/sqrt(Hz) ({run.noise_plan.source['accel_vrw']}); variance "
             f"factors velocity {assessment.factors['velocity']:.3g}, gyro {assessment.factors['gyro']:.3g}")
     params = ParameterSet(values, covariance=covariance, names=names)
-    separation_checks, separation_text = separation_warnings(params)
+    separation_checks, separation_text = separation_warnings(params, run.wander)
     assessment.checks += separation_checks
     assessment.warnings += separation_text
     warnings = run.warnings + run.noise_plan.warnings + assessment.warnings

@@ -71,9 +71,9 @@ def main():
         paths = [write_simulation(simulate(problem, seed=k, name=f"U{k:03d}"), root / "rec") for k in range(args.units)]
         for repeat in range(args.repeats):
             for workers in (1, 2):
+                load = os.getloadavg()[0]  # before the run
                 wall, cpu = timed_batch(paths, root / f"{workers}-{repeat}", workers)
-                rows.append({"repeat": repeat, "workers": workers, "wall_s": wall, "cpu_s": cpu,
-                             "load_average": os.getloadavg()[0]})
+                rows.append({"repeat": repeat, "workers": workers, "wall_s": wall, "cpu_s": cpu, "load_average": load})
     frame = pd.DataFrame(rows)
     one = statistics.median(frame[frame["workers"] == 1]["wall_s"])
     two = statistics.median(frame[frame["workers"] == 2]["wall_s"])

@@ -79,6 +79,8 @@ def prepare_compiled(model="21", bias_instability: bool = False) -> None:
 
     Parallel workers then find them compiled instead of compiling the same libraries at once (the first
     run with an empty cache compiles for a few seconds per library; later ones load them in milliseconds).
+    ``bias_instability``: also the filter with Gauss-Markov biases (a datasheet's instability, or a wander
+    the static data may show when no datasheet gives one).
     """
     from ..model.registry import model_names
     from ..nav.errormodel import sensitivity_chain
@@ -91,6 +93,6 @@ def prepare_compiled(model="21", bias_instability: bool = False) -> None:
     navigation_chain()
     sensitivity_chain()
     step_blocks(model_names(model_groups(model)))
-    layout = Layout(bias_instability, False)
-    for columns in (1, FILTER_COLUMNS):
-        filter_chain(layout.n, columns, transition_pattern(layout).tobytes())
+    for layout in [Layout(False, False)] + ([Layout(True, False)] if bias_instability else []):
+        for columns in (1, FILTER_COLUMNS):
+            filter_chain(layout.n, columns, transition_pattern(layout).tobytes())

@@ -90,9 +90,8 @@ def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",
     """
     task = functools.partial(_seed_rows, problem, tuple(solvers), use_datasheet, model)
     # compiled here once, not by every worker at the same time (with an empty cache)
-    prepare_compiled(model, use_datasheet and datasheet(problem) is not None)
-    if not use_datasheet and datasheet(problem) is not None:  # a wander the static data show may enter (issue 16)
-        prepare_compiled(model, True)
+    # without a datasheet a wander the static data show may enter (issue 16): its filter as well
+    prepare_compiled(model, not use_datasheet or datasheet(problem) is not None)
     rows: list[dict] = []
     for result in run_all(task, list(seeds), workers, scheduler, progress):
         rows += result

@@ -38,6 +38,8 @@ from ..noise.wander import SensorWander
 PIECE_S = 100.0
 MAX_PIECES = 40
 TAU_FRACTION = 0.5
+#: :data:`TAU_FRACTION` in the words of the warning and the report.
+TAU_WORDS = "half the recording"
 INCLUDE_LR = {"accel": 2.71, "gyro": 6.63}
 WARN_LR = 10.83
 #: The wander is taken for model mismatch when an acceleration constant in each static segment (independent
@@ -96,19 +98,24 @@ def record(noise_plan: NoisePlan, estimates: dict[str, SensorWander]) -> None:
             noise_plan.source[f"{sensor}_bias_instability"] = SOURCE
 
 
+#: Per sensor: its name in a sentence, and the natural unit of its bias and wander with the SI size of one.
+SENSOR_WORDS = {"accel": ("accelerometers", "ug", UG), "gyro": ("gyros", "deg/h", DEG_PER_H)}
+
+
 def natural_size(sensor: str, value: float) -> str:
     """A wander's size in natural units (ug, deg/h)."""
-    return f"{value / UG:.3g} ug" if sensor == "accel" else f"{value / DEG_PER_H:.3g} deg/h"
+    _, unit, scale = SENSOR_WORDS[sensor]
+    return f"{value / scale:.3g} {unit}"
 
 
 def describe(estimates: dict[str, SensorWander]) -> str | None:
     """The warning when the static data show bias instability without a datasheet (``None`` when not)."""
-    parts = [f"{'accelerometers' if s == 'accel' else 'gyros'} {natural_size(s, w.sigma)} (likelihood ratio "
+    parts = [f"{SENSOR_WORDS[s][0]} {natural_size(s, w.sigma)} (likelihood ratio "
              f"{w.lr:.3g})" for s, w in estimates.items() if w.included and w.lr > WARN_LR]
     if not parts:
         return None
     tau = next(iter(estimates.values())).tau
     return (f"the static data show bias instability beyond the white noise and no datasheet gives it: "
             f"{', '.join(parts)}, modelled as a Gauss-Markov wander with an assumed correlation time of {tau:.0f} s "
-            "(half the recording, which cannot show its own); the bias sigmas include it. Give the datasheet's "
+            f"({TAU_WORDS}, which cannot show its own); the bias sigmas include it. Give the datasheet's "
             "bias instability (--noise) for a founded value")

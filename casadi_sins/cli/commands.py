@@ -13,7 +13,7 @@ import numpy as np
 from ..calibrate import calibrate
 from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
-from ..calibrate.wander import natural_size
+from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
 from ..core.text import one_line
 from ..core.version import software_versions
@@ -166,7 +166,7 @@ def cmd_calibrate(args) -> int:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"
             seen = ("the static data's misfit taken for model mismatch" if wander.mismatch
                     else "no significant wander in the static data")
-            print(f"note: bias instability is not modelled for the {'accelerometers' if sensor == 'accel' else 'gyros'} "
+            print(f"note: bias instability is not modelled for the {SENSOR_WORDS[sensor][0]} "
                   f"(no --noise datasheet, {seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas "
                   "exclude it")
     for message in result.warnings:

@@ -23,7 +23,7 @@ import pandas as pd
 
 from ..core.version import __version__, software_versions
 from ..calibrate.result import CalibrationResult
-from ..calibrate.wander import INCLUDE_LR
+from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS
 from ..core.units import DEG_PER_H, UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
@@ -107,7 +107,7 @@ def _wander_dict(wander: dict) -> dict | None:
     deg/h); ``upper`` ``None`` when the data do not bound it."""
     if not wander:
         return None
-    unit = {"accel": UG, "gyro": DEG_PER_H}
+    unit = {s: scale for s, (_, _, scale) in SENSOR_WORDS.items()}
     return {s: {"sigma": w.sigma / unit[s], "upper": w.upper / unit[s] if math.isfinite(w.upper) else None,
                 "lr": w.lr, "lr_threshold": INCLUDE_LR[s], "tau_s": w.tau, "included": bool(w.included),
                 "mismatch": bool(w.mismatch)} for s, w in wander.items()}
@@ -232,10 +232,10 @@ def report_markdown(data: dict) -> str:
 def _wander_sentence(sensor: str, v: dict) -> str:
     """One sentence on a sensor's bias instability without a datasheet: modelled from the static data, or not
     and how large it could be."""
-    unit, name = ("ug", "accelerometers") if sensor == "accel" else ("deg/h", "gyros")
+    name, unit, _ = SENSOR_WORDS[sensor]
     if v["included"]:
         return (f"Bias instability of the {name} from the static data (no datasheet): {v['sigma']:.3g} {unit}, "
-                f"Gauss-Markov with an assumed correlation time of {v['tau_s']:.0f} s (half the recording), likelihood "
+                f"Gauss-Markov with an assumed correlation time of {v['tau_s']:.0f} s ({TAU_WORDS}), likelihood "
                 f"ratio {v['lr']:.3g} against none; the bias sigmas include it.")
     bound = (f"95 % upper bound {v['upper']:.3g} {unit}" if v["upper"] is not None else "not bounded by the data")
     seen = (f"what the static data show of a wander (likelihood ratio {v['lr']:.3g}) is explained better by an "

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...data.recording import Recording
 from ...model.noise import SensorNoise
-from ...model.registry import NAMES, NATURAL_SCALE
+from ...model.registry import NAMES
 from ...noise.plan import NoisePlan
 from ...noise.wander import BiasWander, SensorWander
 from ..wander import MISMATCH_LR, decide, unknown_sensors, wander_tau
@@ -49,7 +49,7 @@ def equation_bias_wander(rec: Recording, params: np.ndarray, navs, equations, no
     chol = np.linalg.cholesky(covariance)
     whiten = np.linalg.solve(chol, np.eye(len(chol)))
     units_w = {s: whiten @ u @ whiten.T for s, u in (units | {"segment": segment_offsets(a, equations)}).items()}
-    reml = BiasWander.from_covariances(whiten @ a * NATURAL_SCALE, whiten @ b, units_w, tau)
+    reml = BiasWander.from_covariances(whiten @ a, whiten @ b, units_w, tau)  # columns normalised there
     estimates = reml.estimate(sensors)
     if any(w.sigma > 0.0 for w in estimates.values()):
         competitor = reml.estimate(["segment"])["segment"]

@@ -105,6 +105,21 @@ def sensitivity_chain() -> StepChain:
     return StepChain("sensitivity", "error model step", sensitivity_step_function)
 
 
+def error_model_inputs(rec: Recording, nav: GroupNavigation, params: np.ndarray):
+    """What the error model runs on along a navigated group: the compensated increments ``dtheta``, ``dv``
+    (N, 3), the alignment's attitude error ``phi0`` (3, 21, eq. 15), the attitude at the middle of each
+    sample ``c_mid`` (N, 3, 3) and the navigation's ``f^n dt`` (N, 3)."""
+    dtheta, dv = compensated_increments(rec, params, nav.samples)
+    first = rec.segment_samples(rec.group_segments(nav.group)[0])
+    local = slice(first.start - nav.samples.start, first.stop - nav.samples.start)
+    phi0 = alignment_sensitivity(dtheta[local], dv[local], rec.dt)
+    c_after = quat_to_dcm(nav.quaternion)
+    c_mid = 0.5 * (np.concatenate([nav.initial_attitude[None], c_after[:-1]]) + c_after)
+    velocity = np.concatenate([np.zeros((1, 3)), nav.velocity])
+    force_dt = np.diff(velocity, axis=0) + np.array([0.0, 0.0, rec.site.g * rec.dt])
+    return dtheta, dv, phi0, c_mid, force_dt
+
+
 def velocity_sensitivity(rec: Recording, nav: GroupNavigation, params: np.ndarray) -> np.ndarray:
     """``d(velocity error)/dx`` after each sample of a navigated group, shape (N, 3, 21).
 
@@ -114,16 +129,9 @@ def velocity_sensitivity(rec: Recording, nav: GroupNavigation, params: np.ndarra
     order ``g w dt / 2``.
     """
     dt = rec.dt
-    dtheta, dv = compensated_increments(rec, params, nav.samples)
-    first = rec.segment_samples(rec.group_segments(nav.group)[0])
-    local = slice(first.start - nav.samples.start, first.stop - nav.samples.start)
-    phi0 = alignment_sensitivity(dtheta[local], dv[local], dt)
-    c_after = quat_to_dcm(nav.quaternion)
-    c_mid = 0.5 * (np.concatenate([nav.initial_attitude[None], c_after[:-1]]) + c_after)
+    dtheta, dv, phi0, c_mid, force_dt = error_model_inputs(rec, nav, params)
     w_ie = rec.site.earth_rate
     earth_turn = rotation_matrix(w_ie, -np.linalg.norm(w_ie) * dt)
-    velocity = np.concatenate([np.zeros((1, 3)), nav.velocity])
-    force_dt = np.diff(velocity, axis=0) + np.array([0.0, 0.0, rec.site.g * dt])
     n = len(dtheta)
     data = np.empty((n, 18))
     data[:, :9] = np.swapaxes(c_mid, 1, 2).reshape(n, 9)  # column-major C per row

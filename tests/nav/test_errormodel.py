@@ -41,25 +41,17 @@ def test_sensitivities_predict_the_navigation_difference(kang_sim_noiseless, gro
 def numpy_velocity_sensitivity(rec, nav, params):
     """The error model propagated in closed form with NumPy (the package's implementation before it was
     compiled): ``phi_k = R(t_k) (phi_0 - sum_j R(t_j)^T C_j G_j)``, the velocity error summed."""
-    from casadi_sins.core.rotations import quat_to_dcm, rotation_matrix
-    from casadi_sins.nav.errormodel import alignment_sensitivity, input_sensitivity
-    from casadi_sins.nav.navigation import compensated_increments
+    from casadi_sins.core.rotations import rotation_matrix
+    from casadi_sins.nav.errormodel import error_model_inputs, input_sensitivity
 
     dt = rec.dt
-    dtheta, dv = compensated_increments(rec, params, nav.samples)
-    first = rec.segment_samples(rec.group_segments(nav.group)[0])
-    local = slice(first.start - nav.samples.start, first.stop - nav.samples.start)
-    phi0 = alignment_sensitivity(dtheta[local], dv[local], dt)
-    c_after = quat_to_dcm(nav.quaternion)
-    c_mid = 0.5 * (np.concatenate([nav.initial_attitude[None], c_after[:-1]]) + c_after)
+    dtheta, dv, phi0, c_mid, force_dt = error_model_inputs(rec, nav, params)  # the inputs, shared
     w_ie = rec.site.earth_rate
     t = (np.arange(len(dtheta)) + 1) * dt
     earth_turn = rotation_matrix(w_ie, -np.linalg.norm(w_ie) * t)
     phi = earth_turn @ (phi0[None] - np.cumsum(np.swapaxes(earth_turn, 1, 2) @ (c_mid @ input_sensitivity(
         dtheta, dt, "gyro")), axis=0))
     phi_mid = 0.5 * (np.concatenate([phi0[None], phi[:-1]]) + phi)
-    velocity = np.concatenate([np.zeros((1, 3)), nav.velocity])
-    force_dt = np.diff(velocity, axis=0) + np.array([0.0, 0.0, rec.site.g * dt])
     return np.cumsum(np.cross(force_dt[:, :, None], phi_mid, axis=1) + c_mid @ input_sensitivity(dv, dt, "accel"),
                      axis=0)
 

@@ -32,6 +32,8 @@ UNITS = {
     "s^2/m": (1.0, "quadratic scale"), "ug/g^2": (1e-6 / G0, "quadratic scale"),
     "m": (1.0, "length"), "mm": (1e-3, "length"), "cm": (1e-2, "length"),
     "s": (1.0, "time"), "ms": (1e-3, "time"),
+    "rad/s/(m/s^2)": (1.0, "g-sensitivity"), "deg/h/g": (DEG_PER_H / G0, "g-sensitivity"),
+    "ratio": (1.0, "ratio"), "ppm": (PPM, "ratio"),
 }  # fmt: skip
 #: Multiplier from a unit name to SI.
 TO_SI = {name: factor for name, (factor, _) in UNITS.items()}

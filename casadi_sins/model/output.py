@@ -19,7 +19,9 @@ import casadi as ca
 import numpy as np
 
 from .registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GROUPS, GYRO_BIAS,
-                       GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, SCALE_MASK, groups_in)
+                       GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, SCALE_MASK, groups_in,
+                       regressor_blocks)
+from .regressors import layout
 
 
 def sensor_matrices(p):
@@ -53,37 +55,46 @@ def output_model_expr(dtheta, dv, p, dt):
     return dn_g, dn_a
 
 
-def compensate_expr(dn_g, dn_a, p, dt, accel_correction=None):
+def compensate_expr(dn_g, dn_a, p, dt, extras=None):
     """Increments ``(dtheta, dv)`` from raw pulses: the exact inverse of eq. 1 (CasADi).
 
     ``dn_g``, ``dn_a`` may be 3 x n matrices of pulse sums over n intervals with ``dt`` a 1 x n row
     (the model is linear, so summed pulses compensate exactly to summed increments).
-    ``accel_correction`` (3 x n) is added before ``K_a^-1``: the terms beyond the 21
-    (:mod:`model.extras`).
+    ``extras`` = ``(values, names, regressors)``: the extra parameters' values (CasADi), their names and
+    the steps' regressor array (:func:`model.regressors.layout` of their blocks); each extra group's
+    correction enters its sensor's increments before ``K^-1`` (:mod:`model.groups`), computed from the
+    increments compensated with the 21.
     """
     k_a, s_a, b_a, k_g, s_g, b_g = sensor_matrices(p)
-    dtheta = ca.solve(k_g, ca.diag(s_g) @ dn_g - b_g @ dt)
-    sensed = ca.diag(s_a) @ dn_a - b_a @ dt
-    dv = ca.solve(k_a, sensed if accel_correction is None else sensed + accel_correction)
+    sensed_g = ca.diag(s_g) @ dn_g - b_g @ dt
+    sensed_a = ca.diag(s_a) @ dn_a - b_a @ dt
+    dtheta, dv = ca.solve(k_g, sensed_g), ca.solve(k_a, sensed_a)
+    if extras is None:
+        return dtheta, dv
+    c_g, c_a = corrections_expr(*extras, dtheta, dv)
+    if c_a is not None:
+        dv = ca.solve(k_a, sensed_a + c_a)
+    if c_g is not None:
+        dtheta = ca.solve(k_g, sensed_g + c_g)
     return dtheta, dv
 
 
-def accel_correction_expr(extra_values, names, regressors):
-    """The extra groups' correction ``c`` (3 x M) of :func:`compensate_expr`'s accelerometer increments.
+def corrections_expr(extra_values, names, regressors, dtheta, dv):
+    """The extra groups' corrections ``(c_g, c_a)`` (3 x M each, ``None`` when no group acts on a sensor).
 
     ``extra_values`` are the values (CasADi) of ``names`` (the extra parameters, in order), ``regressors``
-    the (15, M) regressors of the steps (:mod:`model.extras`); ``None`` when there are no extra names.
+    the steps' regressor rows of the blocks the groups read (:mod:`model.regressors`), ``dtheta``, ``dv``
+    the steps' increments compensated with the 21.
     """
-    present = groups_in(names)
-    if not present:
-        return None
     values = {name: extra_values[i] for i, name in enumerate(names)}
-    rows = [0 * regressors[0, :] for _ in range(3)]
-    for key in present:
+    rows = {block: regressors[span, :] for block, span in layout(regressor_blocks(names)).items()}
+    out = {"gyro": None, "accel": None}
+    for key in groups_in(names):
         group = GROUPS[key]
-        for i, term in enumerate(group.correction({n: values[n] for n in group.names if n in values}, regressors)):
-            rows[i] = rows[i] + term
-    return ca.vertcat(*rows)
+        terms = group.correction({n: values[n] for n in group.names if n in values}, rows, dtheta, dv)
+        term = ca.vertcat(*terms)
+        out[group.sensor] = term if out[group.sensor] is None else out[group.sensor] + term
+    return out["gyro"], out["accel"]
 
 
 @functools.lru_cache(maxsize=None)
@@ -98,7 +109,7 @@ def _affine_function(which: str) -> ca.Function:
 
 
 def _apply_rows(which: str, a, b, p, dt: float):
-    core = np.asarray(p, dtype=float)[:N_PARAMS]  # the extras act through model.extras, not here
+    core = np.asarray(p, dtype=float)[:N_PARAMS]  # the extras act through model.groups, not here
     m_a, c_a, m_b, c_b = (np.asarray(x) for x in _affine_function(which)(core, dt))
     a = np.atleast_2d(np.asarray(a, dtype=float))
     b = np.atleast_2d(np.asarray(b, dtype=float))

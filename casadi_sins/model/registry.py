@@ -1,11 +1,12 @@
 """Every parameter of the output model, in one registry: the paper's 21 and the extra groups.
 
-A :class:`ParameterGroup` says everything the rest of the package needs of a group of parameters:
+Each group is a :class:`model.groups.base.ParameterGroup` of its own module under :mod:`model.groups`:
 names (the order of the parameter table), SI unit, natural unit of the error and its size, whether
 the error is relative to the value (scale factors, ppm), the prior (value when not estimated), the
-physics of the extra groups (the correction term of the compensation, for the estimator), whether
-only the velocity steps across rotations show it, and in which order unobservable groups are
-dropped.  Adding a group is one entry here, its physics in :mod:`model.extras`, and its tests.
+sensor it acts on and its physics (the correction of the compensation, the regressor blocks it reads,
+the simulator's truth, its export fields), whether only the velocity steps across rotations show it,
+and in which order unobservable groups are dropped.  Adding a group is its module, one line in
+:data:`GROUPS`, and its tests.
 
 The paper's 21 (Kang et al. 2013, eq. 1)::
 
@@ -17,109 +18,20 @@ The paper's 21 (Kang et al. 2013, eq. 1)::
 
 from __future__ import annotations
 
-import dataclasses
-from typing import Callable
-
 import numpy as np
 
-from ..core.earth import G0
-from ..core.units import ARCSEC, DEG_PER_H, PPM, UG
-from . import extras
+from .groups import gyro_asym, gyro_gsens, lever, paper, quadratic, timing
+from .groups.base import ParameterGroup
 
-
-@dataclasses.dataclass(frozen=True)
-class ParameterGroup:
-    """One group of output-model parameters.
-
-    Attributes
-    ----------
-    key : str
-        Short name (``"gyro_scale"``, ``"lever"``).
-    label : str
-        Name in reports.
-    names : tuple of str
-        Parameter names, in table order.
-    unit : str
-        SI unit of the value in the parameter table.
-    natural_unit : str
-        Unit of the *error* in reports (ppm of the value for scale factors).
-    natural_scale : float
-        SI size of one natural unit (relative for scale factors: 1e-6).
-    relative : bool
-        The error is relative to the value (scale factors: ``S_hat/S - 1``).
-    core : bool
-        One of the paper's 21.
-    prior : float
-        Value when the group is not estimated.
-    meaning : str
-    value_unit, value_scale : str, float
-        Unit and SI size in which an engineer reads the *value* (default: the natural unit).
-    correction : callable or None
-        Extra groups: ``correction(values, regressors) -> [row_x, row_y, row_z]``, the term added to the
-        sensed accelerometer increments before ``K_a^-1`` (:mod:`model.extras`).
-    needs_rotation_steps : bool
-        Seen only through the velocity steps across rotations.
-    drop_rank : int or None
-        Extra groups the schedule cannot separate are dropped in increasing rank (weakest seen first).
-    weak_level : float
-        A 1-sigma above this (natural units) means the schedule does not determine the parameter: about
-        1 % of what is known of it before any calibration (a navigation-grade unit's rough values).
-    """
-
-    key: str
-    label: str
-    names: tuple[str, ...]
-    unit: str
-    natural_unit: str
-    natural_scale: float
-    relative: bool = False
-    core: bool = True
-    prior: float = 0.0
-    meaning: str = ""
-    value_unit: str | None = None
-    value_scale: float | None = None
-    correction: Callable | None = None
-    needs_rotation_steps: bool = False
-    drop_rank: int | None = None
-    weak_level: float = 5.0
-
-
-def _axes(prefix: str, axes=("x", "y", "z")) -> tuple[str, ...]:
-    return tuple(f"{prefix}_{a}" for a in axes)
-
-
-#: The registry, in table order: the paper's 21 first, then the extra groups.
+#: The registry, in table order: the paper's 21 first, then the extra groups (one line each).
 GROUPS: dict[str, ParameterGroup] = {g.key: g for g in (
-    ParameterGroup("accel_bias", "accel bias", _axes("accel_bias"), "m/s^2", "ug", UG,
-                   meaning="B_a: accelerometer bias"),
-    ParameterGroup("accel_scale", "accel scale", _axes("accel_scale"), "m/s/pulse", "ppm", PPM, relative=True,
-                   value_unit="m/s/pulse", value_scale=1.0, meaning="S_a: accelerometer pulse weight"),
-    ParameterGroup("accel_misalign", "accel misalignment", _axes("accel_misalign", ("yx", "zx", "zy")), "rad",
-                   "arcsec", ARCSEC, meaning="K_a lower off-diagonal (row = sensor axis, column)"),
-    ParameterGroup("gyro_bias", "gyro bias", _axes("gyro_bias"), "rad/s", "deg/h", DEG_PER_H, weak_level=0.01,
-                   meaning="B_g: gyro bias"),
-    ParameterGroup("gyro_scale", "gyro scale", _axes("gyro_scale"), "rad/pulse", "ppm", PPM, relative=True,
-                   value_unit="arcsec/pulse", value_scale=ARCSEC, meaning="S_g: gyro pulse weight"),
-    ParameterGroup("gyro_misalign", "gyro misalignment",
-                   _axes("gyro_misalign", ("xy", "xz", "yx", "yz", "zx", "zy")), "rad", "arcsec", ARCSEC,
-                   meaning="K_g off-diagonal (row = sensor axis, column)"),
-    ParameterGroup("quadratic", "accel quadratic scale", _axes("accel_quadratic"), "s^2/m", "ug/g^2", 1e-6 / G0,
-                   core=False, correction=extras.quadratic_correction, drop_rank=3,
-                   meaning="k2 of each accelerometer: its output is a + k2 a^2 for the sensed specific force a"),
-    ParameterGroup("lever", "accel lever arms across the sensing axes (size effect)",
-                   ("accel_x_lever_y", "accel_x_lever_z", "accel_y_lever_x", "accel_y_lever_z"), "m", "mm", 1e-3,
-                   core=False, correction=extras.lever_correction, needs_rotation_steps=True, drop_rank=1,
-                   meaning="position of the x and y accelerometers relative to the z accelerometer (the navigation "
-                           "point), across their sensing axes; each senses w_dot x p + w x (w x p) along its axis"),
-    ParameterGroup("lever_along", "accel lever arms along the sensing axes", ("accel_x_lever_x", "accel_y_lever_y"),
-                   "m", "mm", 1e-3, core=False, correction=extras.lever_correction, needs_rotation_steps=True,
-                   drop_rank=0,
-                   meaning="position of the x (y) accelerometer along its own axis: seen only through the centripetal "
-                           "term, -(w_y^2 + w_z^2) p_x; single-axis turns make it one with the time offset"),
-    ParameterGroup("timing", "gyro/accel time offset", ("accel_time_offset",), "s", "ms", 1e-3, core=False, weak_level=0.2,
-                   correction=extras.timing_correction, needs_rotation_steps=True, drop_rank=2,
-                   meaning="the accelerometer samples describe the specific force this much later than the gyro "
-                           "samples (f -> f - tau w x f)"),
+    *paper.GROUPS,
+    quadratic.GROUP,
+    lever.GROUP,
+    lever.ALONG_GROUP,
+    timing.GROUP,
+    gyro_gsens.GROUP,
+    gyro_asym.GROUP,
 )}
 
 CORE_GROUPS = tuple(k for k, g in GROUPS.items() if g.core)
@@ -173,6 +85,11 @@ def groups_in(names) -> tuple[str, ...]:
     """The extra groups present in a list of names, in registry order."""
     present = set(names)
     return tuple(key for key in EXTRA_GROUPS if any(n in present for n in GROUPS[key].names))
+
+
+def regressor_blocks(names) -> tuple[str, ...]:
+    """The regressor blocks (:mod:`model.regressors`) the extra groups present in ``names`` read."""
+    return tuple(sorted({b for key in groups_in(names) for b in GROUPS[key].regressors}))
 
 
 def unit_of(name: str) -> str:

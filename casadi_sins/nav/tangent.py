@@ -2,7 +2,7 @@
 
 The estimator (:mod:`calibrate.nlp.graph`) navigates each group by steps of summed raw pulses,
 compensated with the parameters (:func:`model.output.compensate_expr`, with the extra groups'
-correction) and stepped by the one strapdown step (:func:`nav.strapdown.step_expr`).  Its Jacobian
+corrections of the gyro and accelerometer increments) and stepped by the one strapdown step (:func:`nav.strapdown.step_expr`).  Its Jacobian
 comes from the step's forward derivative carried along the chain: with ``X`` the state's derivative
 along the ``nd`` directions (the parameters in natural units, then the group's start-attitude
 rotation)::
@@ -14,7 +14,7 @@ chain of compiled blocks (:mod:`core.compiled`)::
 
     const = (21 parameters, their natural scales s, the extra terms, their scales, Earth rate, gravity)
     data  = (gyro pulse sums (3), accelerometer pulse sums (3), step length, previous-step flag,
-             the extended model's 15 regressors)
+             the regressor rows the extra groups read, :mod:`model.regressors`)
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ import functools
 import casadi as ca
 
 from ..core.compiled import block_of, cached_functions
-from ..model.extras import N_REGRESSORS
-from ..model.output import accel_correction_expr, compensate_expr
-from ..model.registry import N_PARAMS, groups_in
+from ..model.output import compensate_expr
+from ..model.registry import N_PARAMS, groups_in, regressor_blocks
+from ..model.regressors import size as regressor_rows
 from .strapdown import STATE_SIZE, step_expr
 
 #: Steps per compiled block of the estimator's chains (a group is padded to a multiple with steps after its end).
@@ -36,7 +36,7 @@ STEP_BLOCK = 100
 def packed_sizes(names) -> tuple[int, int]:
     """Lengths of the packed ``const`` and ``data`` of a step of the parameter model ``names``."""
     extras = len(names) - N_PARAMS
-    return 2 * N_PARAMS + 2 * extras + 4, 8 + (N_REGRESSORS if extras else 0)
+    return 2 * N_PARAMS + 2 * extras + 4, 8 + regressor_rows(regressor_blocks(names))
 
 
 def model_tag(names) -> str:
@@ -49,8 +49,8 @@ def _increments(names, const, data):
     extras = len(names) - N_PARAMS
     n_const = const.numel()
     params, extra_values = const[:N_PARAMS], const[2 * N_PARAMS:2 * N_PARAMS + extras]
-    correction = accel_correction_expr(extra_values, names[N_PARAMS:], data[8:8 + N_REGRESSORS]) if extras else None
-    dtheta, dv = compensate_expr(data[0:3], data[3:6], params, data[6], correction)
+    extra = (extra_values, names[N_PARAMS:], data[8:]) if extras else None
+    dtheta, dv = compensate_expr(data[0:3], data[3:6], params, data[6], extra)
     earth, gravity = const[n_const - 4:n_const - 1], const[n_const - 1]
     return dtheta, dv, earth * data[6], ca.vertcat(0, 0, -gravity * data[6]), data[7]
 

@@ -10,9 +10,13 @@ float64 that Python used) and one inline function::
 with ``dN`` the raw pulses of one sample interval, ``dt`` its length (s), ``dtheta`` in rad and ``dv``
 in m/s (:func:`model.output.compensation_matrices`, the same numbers as the JSON export).  The unit
 id, the table's provenance (recording hash, date, software) are in the comment block and in string
-constants.  The extra terms beyond the 21 (quadratic scale, lever arms, time offset) are not in
-this per-sample affine form: when a table has them, the header says so and defines
-``CASADI_SINS_EXTRAS_NOT_COMPENSATED``.
+constants.  The gyro's extra groups of a table (g-sensitivity, scale asymmetry: each group's
+``c_terms``, :mod:`model.groups`) are per-sample terms after the affine part::
+
+    dtheta -= G_g dv + A_g |dtheta|
+
+The accelerometers' extra terms (quadratic scale, lever arms, time offset) are not in a per-sample
+form: when a table has them, the header says so and defines ``CASADI_SINS_EXTRAS_NOT_COMPENSATED``.
 """
 
 from __future__ import annotations
@@ -23,8 +27,9 @@ import numpy as np
 
 from ..core.text import code_comment
 from ..core.version import __version__
-from ..model.output import compensation_matrices
+from ..model.output import compensation_matrices, sensor_matrices
 from ..model.parameters import ParameterSet
+from ..model.registry import GROUPS
 
 PREFIX = "casadi_sins"
 
@@ -72,16 +77,23 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
              " * (rad/s, m/s^2). All numbers float64, SI; M in rad/pulse and m/s/pulse, c in rad/s and m/s^2.",
              " *"]
     lines += [f" * {_comment(k)}: {_comment(v)}" for k, v in metadata.items()]
-    if params.extras:
-        lines += [" *", " * NOT compensated here: the extra terms of this table (" + _comment(", ".join(params.extras))
+    terms = _extra_terms(params)
+    left = [k for k in params.extras if GROUPS[k].c_terms is None]
+    lines += [f" * {name}: {_comment(meaning)}" for name, _, meaning in terms]
+    if left:
+        lines += [" *", " * NOT compensated here: the extra terms of this table (" + _comment(", ".join(left))
                   + "); see the JSON export."]
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", ""]
-    if params.extras:
+    if left:
         lines += ["#define CASADI_SINS_EXTRAS_NOT_COMPENSATED 1", ""]
+    if terms:
+        lines += ["#include <math.h>", ""]
     lines += [f"static const char {PREFIX}_unit_id[] = {_c_string(metadata.get('unit_id', ''))};",
               f"static const char {PREFIX}_recording_sha256[] = {_c_string(metadata.get('recording_sha256', ''))};",
               f"static const char {PREFIX}_table_sha256[] = {_c_string(metadata.get('table_sha256', ''))};", "",
-              _matrix("M_g", m_g), _vector("c_g", c_g), _matrix("M_a", m_a), _vector("c_a", c_a), "",
+              _matrix("M_g", m_g), _vector("c_g", c_g), _matrix("M_a", m_a), _vector("c_a", c_a)]
+    lines += [_matrix(name, m) for name, m, _ in terms]
+    lines += ["",
               "/* Compensated increments of one sample interval: dtheta (rad) and dv (m/s). */",
               f"static inline void {PREFIX}_compensate(const double dN_g[3], const double dN_a[3], double dt,",
               "                                         double dtheta[3], double dv[3])",
@@ -92,6 +104,30 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
               f" + {PREFIX}_M_g[i][2] * dN_g[2] + {PREFIX}_c_g[i] * dt;",
               f"        dv[i] = {PREFIX}_M_a[i][0] * dN_a[0] + {PREFIX}_M_a[i][1] * dN_a[1]"
               f" + {PREFIX}_M_a[i][2] * dN_a[2] + {PREFIX}_c_a[i] * dt;",
-              "    }",
-              "}", "", f"#endif /* {guard} */"]
+              "    }"]
+    lines += _extra_code(terms)
+    lines += ["}", "", f"#endif /* {guard} */"]
     return "\n".join(lines) + "\n"
+
+
+def _extra_terms(params: ParameterSet) -> list:
+    """``(C name, 3 x 3 matrix, meaning)`` of the table's extra groups with a per-sample form."""
+    k_g = np.asarray(sensor_matrices(params.core)[3], dtype=float)
+    values = params.as_dict()
+    out = []
+    for key in params.extras:
+        group = GROUPS[key]
+        if group.c_terms is not None:
+            out += group.c_terms({n: values[n] for n in group.names if n in values}, np.linalg.inv(k_g))
+    return out
+
+
+def _extra_code(terms) -> list[str]:
+    """The loop subtracting the gyro's extra terms (``G_g dv``, ``A_g |dtheta|``) from ``dtheta``."""
+    if not terms:
+        return []
+    sources = {"G_g": "dv[j]", "A_g": "fabs(first[j])"}
+    lines = ["    {", "        double first[3] = {dtheta[0], dtheta[1], dtheta[2]};", "        int j;",
+             "        for (i = 0; i < 3; ++i) {", "            for (j = 0; j < 3; ++j) {"]
+    lines += [f"                dtheta[i] -= {PREFIX}_{name}[i][j] * {sources[name]};" for name, _, _ in terms]
+    return lines + ["            }", "        }", "    }"]

@@ -17,9 +17,9 @@ PSINS layout (text): the fields of the toolbox's ``clbt`` struct as MATLAB assig
 its compensation ``wm' = Kg*wm - eb*ts``, ``vm' = Ka*vm - db*ts`` applied to increments in rad and
 m/s made with the nominal pulse sizes (``wm = p_g dN_g``) gives our compensated increments:
 ``Kg = K_g^-1 diag(S_g) / p_g``, ``eb = K_g^-1 B_g`` (likewise Ka, db).  The extra terms follow the
-toolbox's signs (``Ka2 = -k2``; lever arms ``rx, ry`` are compensation values, minus the
-accelerometers' positions; ``tGA`` the time offset) as worked out for the peer file in
-the PSINS 19-position peer recording (``docs/recording-format.md``).
+toolbox's signs, each group's own (:mod:`model.groups`: ``Ka2 = -k2``; lever arms ``rx, ry`` are
+compensation values, minus the accelerometers' positions; ``tGA`` the time offset; ``gSens = K_g^-1 G``)
+as worked out for the PSINS 19-position peer recording (``docs/recording-format.md``).
 """
 
 from __future__ import annotations
@@ -31,10 +31,9 @@ import numpy as np
 
 from ..core.text import code_comment
 from ..core.version import __version__
-from ..model.extras import psins_fields
 from ..model.output import sensor_matrices
 from ..model.parameters import ParameterSet
-from ..model.registry import N_PARAMS, unit_of
+from ..model.registry import EXTRA_GROUPS, GROUPS, N_PARAMS, unit_of
 from .cheader import c_header
 
 
@@ -126,12 +125,26 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
               f"clbt.eb = {mat((k_g_inv @ b_g.ravel())[:, None])};",
               f"clbt.Ka = {mat(k_a_inv @ np.diag(s_a.ravel()) / p_a)};",
               f"clbt.db = {mat((k_a_inv @ b_a.ravel())[:, None])};"]
-    extra = psins_fields(params.as_dict())
-    lines += [f"clbt.Ka2 = {mat(extra['Ka2'][:, None])};  % s^2/m",
-              f"clbt.rx = {mat(extra['rx'][:, None])}; clbt.ry = {mat(extra['ry'][:, None])}; "
-              "clbt.rz = [0; 0; 0];  % m",
-              f"clbt.tGA = {float(extra['tGA'])!r};  % s"]
+    for field, (value, unit) in psins_extra_fields(params.as_dict(), k_g_inv).items():
+        value = np.asarray(value, dtype=float)
+        lines.append(f"clbt.{field} = {mat(value[:, None] if value.ndim == 1 else value)};  % {unit}")
+    left = [GROUPS[k].label for k in params.extras if GROUPS[k].psins is None]
+    if left:
+        lines.append(f"% not in the clbt struct (no such field): {', '.join(left)}")
     return "\n".join(lines) + "\n"
+
+
+def psins_extra_fields(values: dict, k_g_inv: np.ndarray) -> dict:
+    """The extra groups' ``clbt`` fields (every group of the registry, 0 when absent from ``values``):
+    ``{field: (value, unit)}``; groups filling parts of one field (lever arms) add up."""
+    out: dict = {}
+    for key in EXTRA_GROUPS:
+        group = GROUPS[key]
+        if group.psins is None:
+            continue
+        for field, (value, unit) in group.psins({n: values[n] for n in group.names if n in values}, k_g_inv).items():
+            out[field] = (out[field][0] + value, unit) if field in out else (value, unit)
+    return out
 
 
 EXPORTS = {"json": ("compensation.json", lambda p, meta: to_json(compensation(p, meta))),

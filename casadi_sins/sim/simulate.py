@@ -9,7 +9,7 @@ evaluated with 6-point Gauss-Legendre quadrature on every piece of the interval 
 breakpoints (error below 1e-18 rad per sample; the integrands are analytic inside a piece).  White
 noise and bias instability are added to the true increments and the output model (eq. 1,
 :func:`model.output.output_model`) turns them into pulses; the extra terms of the truth add their
-exact physics (:func:`model.extras.sensed_extras`); integer pulses carry their remainder.
+exact physics (:func:`model.groups.physics.sensed_outputs`); integer pulses carry their remainder.
 """
 
 from __future__ import annotations
@@ -25,10 +25,10 @@ from ..data.description import recording_files
 from ..data.problem import Problem
 from ..data.recording import Recording
 from ..data.tables import table_text
-from ..model.extras import sensed_extras
+from ..model.groups.physics import sensed_outputs
 from ..model.output import output_model
 from ..model.parameters import ParameterSet
-from ..model.registry import ACCEL_SCALE, N_PARAMS
+from ..model.registry import ACCEL_SCALE, GROUPS, GYRO_SCALE, N_PARAMS, groups_in
 from .motion import MotionPiece, Sway, kinematics_function, plan_motion
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
@@ -94,14 +94,16 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
     return dtheta, dv
 
 
-def accelerometer_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None):
-    """The extra terms of the truth in every accelerometer sample: ``(dv_f, dv_lever, q2)``
-    (:func:`model.extras.sensed_extras`, exact physics by quadrature, in chunks)."""
+def sensor_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None):
+    """The extra groups of the truth in every sample: ``(dv_f, gyro_extra, accel_extra)``
+    (:func:`model.groups.physics.sensed_outputs`, each group's exact physics by quadrature, in chunks)."""
     kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
+    truth = problem.truth.as_dict()
+    present = [GROUPS[k] for k in groups_in(problem.truth.names)]
     parts = []
     for first in range(0, n_samples, _QUADRATURE_CHUNK):
         t0 = np.arange(first, min(first + _QUADRATURE_CHUNK, n_samples)) * dt
-        parts.append(sensed_extras(kinematics, t0, t0 + dt, problem.truth.as_dict()))
+        parts.append(sensed_outputs(kinematics, t0, t0 + dt, truth, present))
     return tuple(np.vstack([p[k] for p in parts]) for k in range(3))
 
 
@@ -146,11 +148,10 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     g = problem.site.g
     dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway)
     truth = problem.truth
-    extra_output = np.zeros_like(dv)  # what the extras add to K_a dv in the output model
+    # what the extra groups add to K_g dtheta and K_a dv in the output model
+    gyro_extra, accel_extra = np.zeros_like(dtheta), np.zeros_like(dv)
     if any(truth[n] != 0.0 for n in truth.names[N_PARAMS:]):
-        dv, lever, q2 = accelerometer_extras(pieces, problem, n_samples, dt, sway)
-        k2 = np.array([truth[f"accel_quadratic_{a}"] if "accel_quadratic_x" in truth.names else 0.0 for a in "xyz"])
-        extra_output = lever + k2 * q2
+        dv, gyro_extra, accel_extra = sensor_extras(pieces, problem, n_samples, dt, sway)
     if noise:
         gyro_white = np.hypot(dev.gyro_noise_deg_h * DEG_PER_H * dt, dev.gyro_arw_deg_rth * ARW_UNIT * np.sqrt(dt))
         accel_white = np.hypot(dev.accel_noise_ug * UG * dt, dev.accel_vrw_ug_rthz * UG * np.sqrt(dt))
@@ -160,7 +161,8 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
                                     dev.gyro_bias_tau_s, rng)
         dv += dt * gauss_markov(n_samples, dt, dev.accel_bias_instability_ug * UG, dev.accel_bias_tau_s, rng)
     gyro, accel = output_model(dtheta, dv, truth.core, dt)
-    accel = accel + extra_output / truth.core[ACCEL_SCALE]
+    gyro = gyro + gyro_extra / truth.core[GYRO_SCALE]
+    accel = accel + accel_extra / truth.core[ACCEL_SCALE]
     if problem.deviations.quantize:
         gyro, accel = quantize(gyro), quantize(accel)
     time = np.round(np.arange(1, n_samples + 1) * dt, 9)

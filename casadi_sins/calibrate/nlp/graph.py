@@ -29,12 +29,13 @@ import numpy as np
 from ...core.compiled import Buffered
 from ...core.rotations import dcm_to_quat
 from ...data.recording import Recording
-from ...model.registry import N_PARAMS, NAMES, natural_scale_of, relative_mask
+from ...model.registry import N_PARAMS, NAMES, natural_scale_of, regressor_blocks, relative_mask
+from ...model.regressors import step_rows
 from ...nav.navigation import group_alignment
 from ...noise.kalman import GroupTrack
 from ...noise.observations import Observation, ObservationKind, ObservationTable
 from ..steps import ROTATION_STEP_S, GroupSteps, group_track, plan_steps
-from .regressors import sample_regressors, static_rates, step_regressors
+from .regressors import sample_regressors, static_rates
 from .shape import ShapeGraph, group_data, group_layout, shape_graph
 
 
@@ -190,8 +191,10 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
     t0 = time.perf_counter()
     names = tuple(names)
     extended = len(names) > N_PARAMS
+    blocks = regressor_blocks(names)
     if extended:
-        per_sample, boundary = sample_regressors(rec.gyro, rec.accel, reference, rec.dt, static_rates(rec, reference))
+        rest = static_rates(rec, reference) if "X" in blocks else None
+        per_sample, boundary = sample_regressors(rec.gyro, rec.accel, reference, rec.dt, blocks, rest)
     layouts, data, observations, plans, starts = [], [], [], [], {}
     for group in rec.group_ids:
         plan = plan_steps(rec, group, observe_s, rotation_step_s, static_step_s)
@@ -199,7 +202,7 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
         starts[group] = group_alignment(rec, group, reference)
         layout, segments = group_layout(plan, names)
         layouts.append(layout)
-        regressors = step_regressors(per_sample, boundary, plan.first, plan.stop) if extended else None
+        regressors = step_rows(per_sample, boundary, plan.first, plan.stop, blocks) if extended else None
         data.append(group_data(rec.site, plan, segments, dcm_to_quat(starts[group]), regressors))
         observations += _group_observations(plan, 3 * len(observations))
     shape, _ = shape_graph(layouts, names)

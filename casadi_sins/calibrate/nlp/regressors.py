@@ -1,4 +1,4 @@
-"""The regressors of the extra output-model terms, per navigation step (see :mod:`model.extras`).
+"""The regressors of the extra output-model terms of a recording (the blocks: :mod:`model.regressors`).
 
 They come from neighbouring samples compensated with reference parameters (the extras are small: a
 ppm change of the reference changes them by a ppm of a micro-g): ``Q2 = sum a_k^2 dt`` per axis,
@@ -14,36 +14,21 @@ import numpy as np
 
 from ...core.rotations import rotation_matrices
 from ...data.recording import Recording
-from ...model.extras import DW, N_REGRESSORS, Q2, X
 from ...model.output import compensate
 from ...model.registry import N_PARAMS
+from ...model.regressors import boundary_rates, sample_rows
 
 
-def sample_regressors(gyro: np.ndarray, accel: np.ndarray, reference: np.ndarray, dt: float,
+def sample_regressors(gyro: np.ndarray, accel: np.ndarray, reference: np.ndarray, dt: float, blocks,
                       static_rate: np.ndarray | None = None) -> np.ndarray:
-    """Per-sample regressors (N, 15) of a recording's samples, and the boundary rates (N + 1, 3).
+    """Per-sample regressors (N, rows) of the given blocks (:mod:`model.regressors`) of a recording's
+    samples compensated with ``reference``, and the boundary rates (N + 1, 3).
 
-    Returns ``(per_sample, boundary_rate)``: ``per_sample`` holds Q2, X, 0 (the dw slot) and M of each
-    sample; ``boundary_rate[k]`` is the rate at the start of sample ``k`` (``N``: the end).
     ``static_rate`` (N, 3) is the rate each sample's body has at rest (Earth rate and bias), taken out
     of the time-offset regressor.
     """
     dtheta, dv = compensate(gyro, accel, reference[:N_PARAMS], dt)
-    w = dtheta / dt
-    out = np.zeros((len(dtheta), N_REGRESSORS))
-    out[:, Q2] = dv**2 / dt
-    turn = dtheta if static_rate is None else dtheta - static_rate * dt
-    out[:, X] = np.cross(turn, dv) / dt
-    sq = np.sum(w * w, axis=1)
-    out[:, 9] = (w[:, 0] ** 2 - sq) * dt
-    out[:, 10] = (w[:, 1] ** 2 - sq) * dt
-    out[:, 11] = (w[:, 2] ** 2 - sq) * dt
-    out[:, 12] = w[:, 0] * w[:, 1] * dt
-    out[:, 13] = w[:, 0] * w[:, 2] * dt
-    out[:, 14] = w[:, 1] * w[:, 2] * dt
-    padded = np.vstack([w[:1], w, w[-1:]])
-    boundary = 0.5 * (padded[:-1] + padded[1:])
-    return out, boundary
+    return sample_rows(dtheta, dv, dt, blocks, static_rate), boundary_rates(dtheta, dt)
 
 
 def static_rates(rec: Recording, reference: np.ndarray) -> np.ndarray:
@@ -75,11 +60,3 @@ def static_rates(rec: Recording, reference: np.ndarray) -> np.ndarray:
             out[cursor:span.stop] = rate
     return out
 
-
-def step_regressors(per_sample: np.ndarray, boundary_rate: np.ndarray, first: np.ndarray,
-                    stop: np.ndarray) -> np.ndarray:
-    """Regressors (15, M) of steps covering samples ``first[j]:stop[j]``."""
-    cumulative = np.vstack([np.zeros(N_REGRESSORS), np.cumsum(per_sample, axis=0)])
-    out = (cumulative[stop] - cumulative[first]).T
-    out[DW] = (boundary_rate[stop] - boundary_rate[first]).T
-    return out

@@ -30,7 +30,7 @@ import numpy as np
 
 from ...core.rotations import quat_from_rotvec_expr, quat_multiply_expr, quat_to_dcm_expr
 from ...core.units import ARCSEC
-from ...model.output import accel_correction_expr, compensate_expr
+from ...model.output import compensate_expr
 from ...model.registry import N_PARAMS
 from ...nav.strapdown import STATE_SIZE, V
 from ...nav.tangent import packed_sizes, step_blocks
@@ -177,10 +177,7 @@ class _Symbols:
         """The state before the first step: the alignment turned by the group's variables, and the first
         step's increments (for its coning and sculling terms)."""
         first = fields["steps"][:, 0]
-        correction = None
-        if self.n_params > N_PARAMS:
-            correction = accel_correction_expr(self.all_params[N_PARAMS:], self.names[N_PARAMS:], first[8:])
-        dtheta, dv = compensate_expr(first[0:3], first[3:6], self.params, first[6], correction)
+        dtheta, dv = compensate_expr(first[0:3], first[3:6], self.params, first[6], self.extras(first[8:]))
         rotation = self.w[self.n_params + 3 * group_index:self.n_params + 3 * group_index + 3] * ARCSEC
         q0 = quat_multiply_expr(quat_from_rotvec_expr(rotation), fields["q_start"])
         return ca.vertcat(q0, ca.DM.zeros(3), dtheta, dv)
@@ -188,9 +185,17 @@ class _Symbols:
     def mean_rates(self, fields: dict, segments: int):
         """Each static segment's mean compensated gyro rate (3 x S)."""
         seg_dt = fields["segment_dt"].T
+        rows = packed_sizes(self.names)[1] - 8  # the gyro groups read no regressor; the accelerometers' are unused
         dtheta, _ = compensate_expr(ca.reshape(fields["segment_gyro"], 3, segments),
-                                    ca.reshape(fields["segment_accel"], 3, segments), self.params, seg_dt)
+                                    ca.reshape(fields["segment_accel"], 3, segments), self.params, seg_dt,
+                                    self.extras(ca.DM.zeros(rows, segments)))
         return dtheta / ca.repmat(seg_dt, 3, 1)
+
+    def extras(self, regressors):
+        """The extra groups' part of :func:`model.output.compensate_expr` (``None`` for the 21)."""
+        if self.n_params == N_PARAMS:
+            return None
+        return self.all_params[N_PARAMS:], self.names[N_PARAMS:], regressors
 
     def columns(self, group_index: int) -> list[int]:
         """The group's directions among the variables: the parameters, then its start attitude."""

@@ -9,6 +9,8 @@
    keeps the extra groups the data support (:mod:`.selection`).
    :func:`_bias_wander`: without a datasheet's bias instability, the wander the static data show
    (:mod:`.wander`); an included term enters the noise model and the solve is repeated under it.
+   A misfit of a 21-parameter fit is first tried on the extra groups (:func:`_evidence`, :mod:`.evidence`):
+   a group that explains it is named with ``--model auto`` as the remedy, and no wander is blamed.
 4. :func:`_assess`: the checks (:mod:`.diagnostics`); when the residuals exceed the noise model, the
    errors outside it are estimated (:mod:`.likelihood`) and the solve is repeated with them.
 5. :func:`_result`: the parameter table, its covariance and the report's contents.
@@ -36,6 +38,7 @@ from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from ..wander import describe, natural_size, record, with_wander
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
+from .evidence import candidate_groups, evidence_warning, group_evidence, is_21
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
 from .ipopt import quick_weights
@@ -68,6 +71,8 @@ class _Run:
     built: list[ResidualGraph] = dataclasses.field(default_factory=list)
     selection: dict | None = None
     wander: dict = dataclasses.field(default_factory=dict)
+    evidence: dict | None = None
+    evidence_named: bool = False
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -202,8 +207,9 @@ def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[Res
         # steps that the model cannot explain: a 21-parameter fit of a unit with lever arms or a time offset
         # would take them for sensor errors; a model with those terms keeps the steps (any misfit left is an
         # unmodelled error, stage 4)
-        sees_steps = {"lever", "timing"} <= set(groups_in(graph.names))
+        sees_steps = any(GROUPS[g].needs_rotation_steps for g in groups_in(graph.names))
         if mode and len(modes) > 1 and not sees_steps and fit.rotation_step_ratio > STEP_CONSISTENCY_LIMIT:
+            _evidence(run, graph, fit, "the misfit of the velocity steps across rotations")
             message = (f"the velocity steps across rotations are {np.sqrt(fit.rotation_step_ratio):.3g} times "
                        f"noisier than the static residuals: not explained by the {model_label(graph.names)} "
                        "(lever arms, timing offset?); refitted without them")
@@ -230,10 +236,37 @@ def _select(run: _Run, graph: ResidualGraph, fit: Fit, mode: bool) -> tuple[Resi
     return graph, fit
 
 
+def _evidence(run: _Run, graph: ResidualGraph, fit: Fit, misfit: str) -> bool:
+    """A misfit of a 21-parameter fit: do extra groups explain it (:mod:`.evidence`)?  Tried once, before
+    the misfit is blamed on a bias instability or the schedule; the groups found are named once, with
+    ``--model auto`` as the remedy.  Returns whether any group explains it."""
+    if run.model not in ("21", None) or not is_21(graph):
+        return False
+    if run.evidence is None:
+        saved, warnings = run.groups, list(run.warnings)
+        run.groups = candidate_groups(fit.use_rotation_steps)
+        extended = _observable_graph(run)
+        run.groups, run.warnings = saved, warnings
+        run.evidence = {} if is_21(extended) else group_evidence(run.rec, graph, fit, run.noise_plan, extended,
+                                                                 run.progress)
+        run.say("terms outside the 21 on this misfit: " + (", ".join(
+            f"{g} {v['statistic']:.3g} (threshold {v['threshold']:.3g})" for g, v in run.evidence.items()) or "none"))
+    message = evidence_warning(run.evidence, misfit)
+    if message and not run.evidence_named:
+        run.evidence_named = True
+        run.warnings.append(message)
+        run.say(f"warning: {message}")
+    return message is not None
+
+
 def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
     """Stage 3b: the bias instability the static data show when no datasheet gives it; an included term
     enters the noise model (Gauss-Markov states in the filter) and the solve is repeated under it."""
     run.wander = estimate_bias_wander(run.rec, fit, run.noise_plan)
+    if any(w.included or w.mismatch for w in run.wander.values()) and _evidence(
+            run, graph, fit, "the misfit of the static data (else taken for a bias instability)"):
+        for wander in run.wander.values():  # a term of the output model, not a wander
+            wander.mismatch, wander.included = wander.mismatch or wander.included, False
     model = with_wander(fit.noise, run.wander)
     for sensor, wander in run.wander.items():
         run.say(f"bias instability of the {sensor} from the static data: {natural_size(sensor, wander.sigma)} "
@@ -259,6 +292,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     assessment = assess(graph, fit, run.noise_plan)
     if not assessment.model_fails:
         return fit, assessment
+    _evidence(run, graph, fit, "the misfit beyond the noise model")
     # errors outside the model: an unmodelled acceleration per static segment, an unmodelled rate per gyro
     # mean (and a velocity error per rotation), with variances from the residuals, and solve again
     unmodelled = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,

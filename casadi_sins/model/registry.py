@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .groups import gyro_asym, gyro_gsens, lever, paper, quadratic, timing
+from .groups import cross_quadratic, gyro_asym, gyro_gsens, lever, paper, quadratic, timing
 from .groups.base import ParameterGroup
 
 #: The registry, in table order: the paper's 21 first, then the extra groups (one line each).
@@ -32,6 +32,7 @@ GROUPS: dict[str, ParameterGroup] = {g.key: g for g in (
     timing.GROUP,
     gyro_gsens.GROUP,
     gyro_asym.GROUP,
+    cross_quadratic.GROUP,
 )}
 
 CORE_GROUPS = tuple(k for k, g in GROUPS.items() if g.core)

@@ -21,7 +21,8 @@ import numpy as np
 from .registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GROUPS, GYRO_BIAS,
                        GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, SCALE_MASK, groups_in,
                        regressor_blocks)
-from .regressors import layout
+from .regressors import boundary_rates, layout, sample_rows, step_rows
+from .regressors import size as regressor_size
 
 
 def sensor_matrices(p):
@@ -128,6 +129,32 @@ def compensate(dn_g, dn_a, p, dt: float):
     and applies that to all samples at once.
     """
     return _apply_rows("compensate", dn_g, dn_a, p, dt)
+
+
+@functools.lru_cache(maxsize=None)
+def _sample_function(names: tuple[str, ...]) -> ca.Function:
+    """``(dN_g, dN_a, p, dt, extra values, regressors) -> (dtheta, dv)`` of one sample, every group of ``names``."""
+    rows = regressor_size(regressor_blocks(names))
+    dn_g, dn_a, p, dt = ca.SX.sym("dn_g", 3), ca.SX.sym("dn_a", 3), ca.SX.sym("p", N_PARAMS), ca.SX.sym("dt")
+    extra, regs = ca.SX.sym("extra", len(names) - N_PARAMS), ca.SX.sym("regs", rows)
+    dtheta, dv = compensate_expr(dn_g, dn_a, p, dt, (extra, names[N_PARAMS:], regs))
+    return ca.Function("compensate_sample", [dn_g, dn_a, p, dt, extra, regs], [dtheta, dv])
+
+
+def compensate_table(dn_g, dn_a, values, names, dt: float):
+    """Compensated increments (N, 3) from raw pulses (N, 3) with a whole table: the 21 (:func:`compensate`)
+    and its extra groups sample by sample (their regressors from the samples compensated with the 21,
+    :mod:`model.regressors`; the time-offset regressor keeps the Earth rate, a 1e-7 relative error)."""
+    names, values = tuple(names), np.asarray(values, dtype=float)
+    dtheta, dv = compensate(dn_g, dn_a, values[:N_PARAMS], dt)
+    if len(names) == N_PARAMS:
+        return dtheta, dv
+    blocks, n = regressor_blocks(names), len(dtheta)
+    regs = step_rows(sample_rows(dtheta, dv, dt, blocks), boundary_rates(dtheta, dt), np.arange(n),
+                     np.arange(1, n + 1), blocks)
+    out = _sample_function(names).map(n)(np.asarray(dn_g, float).T, np.asarray(dn_a, float).T, values[:N_PARAMS], dt,
+                                         values[N_PARAMS:], regs)
+    return np.asarray(out[0]).T, np.asarray(out[1]).T
 
 
 def compensation_matrices(p) -> dict[str, tuple[np.ndarray, np.ndarray]]:

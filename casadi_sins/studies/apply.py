@@ -1,7 +1,7 @@
 """Apply a parameter table to a recording: the compensated recording and its check at rest.
 
-The raw pulses of every sample are compensated with the table (eq. 1 inverted,
-:func:`model.output.compensate`) and written as a recording of the same format whose "pulses" are
+The raw pulses of every sample are compensated with the table (eq. 1 inverted and every extra group's
+correction, :func:`model.output.compensate_table`) and written as a recording of the same format whose "pulses" are
 the compensated increments themselves: ``gyro_*`` in rad, ``accel_*`` in m/s per sample, the pulse
 size 1 rad and 1 m/s implied.  Such a recording calibrates to the identity table (scale factors 1,
 misalignments and biases 0) within its sigma, when the table was right.
@@ -10,8 +10,8 @@ The check, per static segment (the unit at rest): the mean compensated specific 
 magnitude of the site's gravity and the mean rate that of the Earth, with the component along the
 vertical ``Omega sin L`` and the horizontal one ``Omega cos L``; the noise columns are the 1-sigma of
 each mean from the scatter of its samples.  A table that is off shows here as errors far beyond
-the noise.  Only the 21 parameters are applied: at rest the lever arms and the time offset act not,
-and the quadratic scale factor of the extended model is left out (said in the notes).
+the noise.  The extra groups are applied sample by sample
+(the lever arms and the time offset act not at rest; the gyro g-sensitivity does).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from ..core.units import DEG_PER_H, UG
 from ..data.description import description_toml
 from ..data.recording import Recording
 from ..data.samples import samples_csv
-from ..model.output import compensate
+from ..model.output import compensate_table
 from ..model.parameters import ParameterSet
 from ..report.tables import frame_files
 
@@ -54,7 +54,7 @@ class Applied:
 
 def compensated_recording(rec: Recording, params: ParameterSet) -> Recording:
     """The recording with its pulses replaced by compensated increments (rad, m/s; pulse size 1)."""
-    dtheta, dv = compensate(rec.gyro, rec.accel, params.core, rec.dt)
+    dtheta, dv = compensate_table(rec.gyro, rec.accel, params.values, params.names, rec.dt)
     return dataclasses.replace(rec, name=f"{rec.name}-compensated", gyro=dtheta, accel=dv, source=None,
                                warnings=list(rec.warnings))
 
@@ -89,9 +89,6 @@ def apply_table(rec: Recording, params: ParameterSet) -> Applied:
     """Compensate a recording with a table and check it at rest."""
     compensated = compensated_recording(rec, params)
     notes = []
-    if params.extras:
-        notes.append(f"the table's extra terms ({', '.join(params.extras)}) are not applied: only the 21 "
-                     "parameters of eq. 1 compensate sample by sample")
     if not rec.static_segments:
         notes.append("the recording has no static segment: nothing to check against gravity and the Earth rate")
     return Applied(compensated, static_check(compensated), notes)

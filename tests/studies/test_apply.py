@@ -59,3 +59,15 @@ def test_apply_names_a_bad_table_in_one_line(tmp_path, short_problem, capsys):
     assert main(["apply", str(tmp_path / "bad.csv"), str(rec_path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert "bad.csv, line 2" in err and len(err.splitlines()) == 1
+
+
+def test_the_extra_groups_are_applied_sample_by_sample(short_problem):
+    """A unit with gyro g-sensitivity (deg/h per g) and scale asymmetry: its true table reproduces the Earth
+    rate at rest; its 21 alone leave the g-sensitivity's bias of each position."""
+    names = R.model_names(("gyro_gsens", "gyro_asym"))
+    gsens = np.array([2, -3, 1, 4, -2, 1.5, -1, 2.5, -3.5]) * 1e-3 * R.GROUPS["gyro_gsens"].natural_scale
+    values = np.concatenate([short_problem.truth.core, gsens, [3e-6, -4e-6, 5e-6]])
+    problem = short_problem.__class__(**{**short_problem.__dict__, "truth": ParameterSet(values, names=names)})
+    sim = simulate(problem, seed=3, noise=False)
+    assert apply_table(sim.recording, sim.truth).worst()["earth_rate_error_deg_h"] < 1e-5
+    assert apply_table(sim.recording, ParameterSet(sim.truth.core)).worst()["earth_rate_error_deg_h"] > 1e-3

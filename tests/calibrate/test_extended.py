@@ -75,7 +75,7 @@ def test_auto_keeps_no_extra_group_on_the_paper_problem(kang_sim):
 
 def test_the_ils_fits_the_21_only(kang_sim):
 
-    with pytest.raises(CalibrationError, match="fits the 21 parameters only"):
+    with pytest.raises(CalibrationError, match="fits the paper.s 21 parameters"):
         calibrate_ils(kang_sim.recording, model="extended")
 
 

@@ -58,6 +58,9 @@ ABSOLUTE_TOLERANCE = np.where(np.isin(np.array(NATURAL_UNITS), ["deg/h"]), 1e-5,
 #: The longest group the ILS takes: it holds per-sample sensitivities (21 per axis) and navigation states.
 MAX_GROUP_SAMPLES = 1_500_000
 
+#: What the ILS fits, in one line.
+FITS = ("the ILS (the paper's method) fits the paper's 21 parameters (eq. 1) only; the extra groups (g-sensitivity, "
+        "scale asymmetry, quadratic and cross-quadratic terms, lever arms, time offset) need the nlp solver")
 SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
                  "from the sensor noise model (raw-data estimate, datasheet, bias wander of the static data), times the variance factor when "
                  "the residuals exceed it")
@@ -90,9 +93,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     allow_base_motion : bool
         Calibrate although the base sways (the result is then unreliable: see below).
     model : "21"
-        The ILS fits the paper's 21 parameters only: its equations are slopes and curvatures of the
-        static velocity, which do not see the steps across rotations where lever arms and a time
-        offset act; the extra terms need the NLP (``model="extended"`` or ``"auto"``).
+        The ILS fits the paper's 21 parameters only (:data:`FITS`); the extra groups need the NLP
+        (``model="extended"`` or ``"auto"``).
 
     Raises
     ------
@@ -102,6 +104,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
         takes for sensor errors), the equations are rank deficient or the iteration does not converge.
     """
     _check_applicable(rec, model)
+    if progress:
+        progress(f"ils: {FITS}")
     t_start = time.perf_counter()
     initial = initial or rough_parameters(rec)
     params = initial.core.copy()
@@ -189,9 +193,7 @@ def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: Noi
 def _check_applicable(rec: Recording, model) -> None:
     """Refuse what the paper's method cannot do: the extended model, groups too long to hold in memory."""
     if model not in ("21", None, ()):
-        raise CalibrationError("the ILS (the paper's method) fits the 21 parameters only: its slopes and curvatures "
-                               "of the static velocity do not see the velocity steps across rotations where lever "
-                               "arms and a time offset act; use the nlp solver for the extended model")
+        raise CalibrationError(f"{FITS}; use the nlp solver for the extended model")
     longest = max(rec.group_samples(g).stop - rec.group_samples(g).start for g in rec.group_ids)
     if longest > MAX_GROUP_SAMPLES:
         raise CalibrationError(f"a group of {longest} samples: the ILS keeps the error model's sensitivities of every "

@@ -209,10 +209,10 @@ def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[Res
         # unmodelled error, stage 4)
         sees_steps = any(GROUPS[g].needs_rotation_steps for g in groups_in(graph.names))
         if mode and len(modes) > 1 and not sees_steps and fit.rotation_step_ratio > STEP_CONSISTENCY_LIMIT:
-            _evidence(run, graph, fit, "the misfit of the velocity steps across rotations")
+            named = _evidence(run, graph, fit, "the misfit of the velocity steps across rotations")
             message = (f"the velocity steps across rotations are {np.sqrt(fit.rotation_step_ratio):.3g} times "
                        f"noisier than the static residuals: not explained by the {model_label(graph.names)} "
-                       "(lever arms, timing offset?); refitted without them")
+                       f"({'the terms named' if named else 'lever arms, timing offset?'}); refitted without them")
             run.say(message)
             run.warnings.append(message)
             continue

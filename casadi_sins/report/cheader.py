@@ -127,7 +127,8 @@ def _extra_code(terms) -> list[str]:
     if not terms:
         return []
     sources = {"G_g": "dv[j]", "A_g": "fabs(first[j])"}
-    lines = ["    {", "        double first[3] = {dtheta[0], dtheta[1], dtheta[2]};", "        int j;",
+    lines = ["    {", "        double first[3];", "        int j;",
+             "        for (i = 0; i < 3; ++i) first[i] = dtheta[i];",
              "        for (i = 0; i < 3; ++i) {", "            for (j = 0; j < 3; ++j) {"]
     lines += [f"                dtheta[i] -= {PREFIX}_{name}[i][j] * {sources[name]};" for name, _, _ in terms]
     return lines + ["            }", "        }", "    }"]

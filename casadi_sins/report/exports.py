@@ -127,7 +127,8 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
               f"clbt.db = {mat((k_a_inv @ b_a.ravel())[:, None])};"]
     for field, (value, unit) in psins_extra_fields(params.as_dict(), k_g_inv).items():
         value = np.asarray(value, dtype=float)
-        lines.append(f"clbt.{field} = {mat(value[:, None] if value.ndim == 1 else value)};  % {unit}")
+        text = repr(float(value) + 0.0) if value.ndim == 0 else mat(value[:, None] if value.ndim == 1 else value)
+        lines.append(f"clbt.{field} = {text};  % {unit}")
     left = [GROUPS[k].label for k in params.extras if GROUPS[k].psins is None]
     if left:
         lines.append(f"% not in the clbt struct (no such field): {', '.join(left)}")

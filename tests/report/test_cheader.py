@@ -9,7 +9,9 @@ import pytest
 
 from casadi_sins.cli import main
 from casadi_sins.data.tables import write_table
-from casadi_sins.model.output import compensate
+from casadi_sins.model import registry as R
+from casadi_sins.model.output import compensate_table
+from casadi_sins.model.parameters import ParameterSet
 from casadi_sins.report.cheader import c_header
 
 COMPILER = shutil.which("gcc") or shutil.which("cc") or shutil.which("clang")
@@ -29,9 +31,19 @@ int main(void) {
 """
 
 
+def _gyro_extras_table(kang_problem):
+    """The paper's unit with gyro g-sensitivity (deg/h/g) and scale asymmetry (ppm)."""
+    names = R.model_names(("gyro_gsens", "gyro_asym"))
+    gsens = np.arange(1, 10) * 1e-3 * R.GROUPS["gyro_gsens"].natural_scale
+    return ParameterSet(np.concatenate([kang_problem.truth.core, gsens, [3e-6, -4e-6, 5e-6]]), names=names)
+
+
 @pytest.mark.skipif(COMPILER is None, reason="no C compiler on this machine")
-def test_the_header_compiles_and_compensates_like_python(tmp_path, kang_problem):
-    params = kang_problem.truth
+@pytest.mark.parametrize("extras", [False, True])
+def test_the_header_compiles_and_compensates_like_python(tmp_path, kang_problem, extras):
+    """With the gyro's extra groups too (g-sensitivity, scale asymmetry: per-sample terms)."""
+    params = _gyro_extras_table(kang_problem) if extras else kang_problem.truth
+    assert "EXTRAS_NOT_COMPENSATED" not in c_header(params)
     (tmp_path / "unit.h").write_text(c_header(params, {"unit_id": "SN 7 */ \"x\"", "recording_sha256": "ab" * 32}))
     (tmp_path / "main.c").write_text(PROGRAM)
     subprocess.run([COMPILER, "-std=c99", "-Wall", "-Werror", "-pedantic", "-O2", "-o", str(tmp_path / "comp"),
@@ -44,7 +56,7 @@ def test_the_header_compiles_and_compensates_like_python(tmp_path, kang_problem)
     lines = out.strip().split("\n")
     assert lines[-1] == 'SN 7 */ "x"'  # the comment is defused, the string kept
     got = np.array([[float(x) for x in line.split()] for line in lines[:-1]])
-    dtheta, dv = compensate(pulses[:, :3], pulses[:, 3:], params.values, dt)
+    dtheta, dv = compensate_table(pulses[:, :3], pulses[:, 3:], params.values, params.names, dt)
     np.testing.assert_allclose(got[:, :3], dtheta, rtol=1e-14, atol=1e-13 * np.abs(dtheta).max())
     np.testing.assert_allclose(got[:, 3:], dv, rtol=1e-14, atol=1e-13 * np.abs(dv).max())
 

@@ -247,13 +247,13 @@ def cmd_budget(args) -> int:
         table = read_table(args.params)
         if table.sigma is None:
             raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
-        nominal, covariance = table.values, np.diag(np.nan_to_num(table.sigma) ** 2)
+        nominal, covariance, names = table.values, np.diag(np.nan_to_num(table.sigma) ** 2), table.names
         source = f"{args.params} (sigma only: correlations between parameters not known)"
     else:
         pred = predict_problem(problem)
-        nominal, covariance = pred.nominal.values, pred.nominal.covariance
+        nominal, covariance, names = pred.nominal.values, pred.nominal.covariance, pred.nominal.names
         source = f"the predicted covariance of {problem.name}'s schedule"
-    budget = problem_budget(problem, nominal, covariance, args.orientation, args.hours)
+    budget = problem_budget(problem, nominal, covariance, args.orientation, args.hours, names)
     table = write_budget(budget, args.out, safe_stem(problem.name))
     print(f"parameter uncertainty from {source}")
     print(table.to_string(index=False, float_format=_number_format(3)))

@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
                    "problem's, or measured in the recording)")
     p.add_argument("--model", default="21", choices=["21", "extended"],
-                   help="extended: also predict the extra terms (quadratic scale, lever arms, time offset)")
+                   help="extended: also predict the extra groups of the registry (quadratic and cross-quadratic terms, lever arms, time offset, gyro g-sensitivity and scale asymmetry)")
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")

@@ -131,6 +131,21 @@ def compensate(dn_g, dn_a, p, dt: float):
     return _apply_rows("compensate", dn_g, dn_a, p, dt)
 
 
+def rest_sensitivity(names, rate, force) -> tuple[np.ndarray, np.ndarray]:
+    """``(gyro, accel)``, each (3, extras): what an error of each extra parameter of ``names`` (true minus
+    estimated) adds to the compensated rate and specific force of a unit at rest with body ``rate`` and
+    ``force`` (SI): the groups' own corrections differentiated (:func:`corrections_expr`), per unit time."""
+    extra = tuple(names)[N_PARAMS:]
+    zeros = np.zeros((3, len(extra)))
+    if not extra:
+        return zeros, zeros
+    x = ca.SX.sym("x", len(extra))
+    rate, force = np.asarray(rate, dtype=float), np.asarray(force, dtype=float)
+    regs = sample_rows(rate[None], force[None], 1.0, regressor_blocks(names), rate[None])
+    terms = corrections_expr(x, extra, ca.DM(regs.T), ca.DM(rate), ca.DM(force))
+    return tuple(zeros if c is None else -np.asarray(ca.evalf(ca.jacobian(c, x))) for c in terms)
+
+
 @functools.lru_cache(maxsize=None)
 def _sample_function(names: tuple[str, ...]) -> ca.Function:
     """``(dN_g, dN_a, p, dt, extra values, regressors) -> (dtheta, dv)`` of one sample, every group of ``names``."""

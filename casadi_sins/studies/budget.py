@@ -30,19 +30,29 @@ from ..core.orientation import orientation_to_dcm
 from ..core.rotations import skew
 from ..core.units import DEG_PER_H, UG
 from ..model.noise import SensorNoise
-from ..model.registry import CORE_SPANS, N_PARAMS, SCALE_MASK
+from ..model.output import rest_sensitivity
+from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_mask
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
 from ..report.plots import pyplot, save_figure
 from ..report.tables import write_frame
 
-# error state: phi (3), dv_E, dv_N, dL, dlon, then the 21 parameter errors
+# error state: phi (3), dv_E, dv_N, dL, dlon, then the parameter errors (the 21, then any extra groups)
 N_NAV = 7
 N_STATE = N_NAV + N_PARAMS
 
 
-def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity: float) -> np.ndarray:
-    """Continuous-time matrix ``F`` of the augmented error state on a static base."""
+def parameter_inputs(attitude: np.ndarray, w_body: np.ndarray, f_body: np.ndarray, names=NAMES):
+    """``(d(C d_omega)/dx, d(C d_f)/dx)`` (3, parameters) at rest: the 21's (:func:`nav.errormodel.input_sensitivity`)
+    and each extra group's (:func:`model.output.rest_sensitivity`)."""
+    rest_g, rest_a = rest_sensitivity(names, w_body, f_body)
+    gyro = np.hstack([input_sensitivity(w_body[None], 1.0, "gyro")[0], rest_g])
+    accel = np.hstack([input_sensitivity(f_body[None], 1.0, "accel")[0], rest_a])
+    return attitude @ gyro, attitude @ accel
+
+
+def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity: float, names=NAMES) -> np.ndarray:
+    """Continuous-time matrix ``F`` of the augmented error state on a static base (parameters ``names``)."""
     omega = EARTH_RATE
     sl, cl = np.sin(latitude), np.cos(latitude)
     r_m, r_n = earth_radii(latitude)
@@ -50,10 +60,10 @@ def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity
     w_ie = omega * np.array([0.0, cl, sl])
     f_n = np.array([0.0, 0.0, gravity])
     w_body, f_body = attitude.T @ w_ie, attitude.T @ f_n
-    gyro_input = attitude @ input_sensitivity(w_body[None], 1.0, "gyro")[0]  # d(C d_omega)/dx, (3, 21)
-    accel_input = attitude @ input_sensitivity(f_body[None], 1.0, "accel")[0]
-    f = np.zeros((N_STATE, N_STATE))
-    phi, dv, par = slice(0, 3), slice(3, 5), slice(N_NAV, N_STATE)
+    gyro_input, accel_input = parameter_inputs(attitude, w_body, f_body, names)  # d(C d_omega)/dx, (3, parameters)
+    n_state = N_NAV + len(names)
+    f = np.zeros((n_state, n_state))
+    phi, dv, par = slice(0, 3), slice(3, 5), slice(N_NAV, n_state)
     f[phi, phi] = -skew(w_ie)
     f[phi, 5] = omega * np.array([0.0, -sl, cl])  # d(w_ie)/dL
     f[phi, dv] = np.array([[0.0, -1.0 / r_m], [1.0 / r_n, 0.0], [sl / cl / r_n, 0.0]])  # d(w_en)/d(v_E, v_N)
@@ -67,9 +77,9 @@ def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity
     return f
 
 
-def noise_input(attitude: np.ndarray) -> np.ndarray:
+def noise_input(attitude: np.ndarray, n_params: int = N_PARAMS) -> np.ndarray:
     """``G`` mapping gyro and accelerometer white noise (body, 6) into the error state."""
-    g = np.zeros((N_STATE, 6))
+    g = np.zeros((N_NAV + n_params, 6))
     g[0:3, 0:3] = -attitude
     g[3:5, 3:6] = attitude[:2]
     return g
@@ -98,16 +108,19 @@ class Budget:
 
 def error_budget(calibration_covariance: np.ndarray, nominal: np.ndarray, attitude: np.ndarray, latitude: float,
                  height: float, gravity: float, accel_noise_ug: float, gyro_noise_deg_h: float, rate_hz: float,
-                 duration_s: float = 86400.0, step_s: float = 60.0, align_s: float = 300.0) -> Budget:
-    """1-sigma north/east position error of static navigation by source, over ``duration_s``."""
+                 duration_s: float = 86400.0, step_s: float = 60.0, align_s: float = 300.0, names=NAMES) -> Budget:
+    """1-sigma north/east position error of static navigation by source, over ``duration_s``; ``names``
+    the parameters of the covariance (the 21, then any extra groups: each is a source)."""
     dt = 1.0 / rate_hz
-    f_matrix = error_dynamics(attitude, latitude, height, gravity)
-    g_matrix = noise_input(attitude)
+    names = tuple(names)
+    n_params = len(names)
+    f_matrix = error_dynamics(attitude, latitude, height, gravity, names)
+    g_matrix = noise_input(attitude, n_params)
     q_gyro = (gyro_noise_deg_h * DEG_PER_H) ** 2 * dt  # white noise per sample -> PSD
     q_accel = (accel_noise_ug * UG) ** 2 * dt
     q = np.diag([q_gyro] * 3 + [q_accel] * 3)
     # discretisation (Van Loan)
-    n = N_STATE
+    n = N_NAV + n_params
     van_loan = np.zeros((2 * n, 2 * n))
     van_loan[:n, :n] = -f_matrix
     van_loan[:n, n:] = g_matrix @ q @ g_matrix.T
@@ -120,16 +133,16 @@ def error_budget(calibration_covariance: np.ndarray, nominal: np.ndarray, attitu
     w_ie = earth_rate_enu(latitude)
     w_b, f_b = attitude.T @ w_ie, attitude.T @ np.array([0.0, 0.0, gravity])
     samples = int(round(align_s * rate_hz))
-    align_map = alignment_sensitivity(np.tile(w_b * dt, (4, 1)), np.tile(f_b * dt, (4, 1)), dt)  # (3, 21)
+    align_map = alignment_map(w_b, f_b, dt, names)  # (3, parameters)
     noise_means = np.diag([q_accel / dt / samples] * 3 + [q_gyro / dt / samples] * 3)  # variance of the means
     means_map = alignment_error(f_b, w_b, np.eye(6))  # d(phi_0)/d(mean f, mean w), (3, 6)
     align_noise = means_map @ noise_means @ means_map.T
 
     def initial(param_cov: np.ndarray, with_align_noise: bool) -> np.ndarray:
         p0 = np.zeros((n, n))
-        t0 = np.zeros((n, N_PARAMS))
+        t0 = np.zeros((n, n_params))
         t0[0:3] = align_map
-        t0[N_NAV:] = np.eye(N_PARAMS)
+        t0[N_NAV:] = np.eye(n_params)
         p0 += t0 @ param_cov @ t0.T
         if with_align_noise:
             p0[0:3, 0:3] += align_noise
@@ -148,22 +161,38 @@ def error_budget(calibration_covariance: np.ndarray, nominal: np.ndarray, attitu
             p = phi_d @ p @ phi_d.T + (q_d if noise else 0.0)
         return out
 
-    covariance = _error_state_covariance(calibration_covariance, nominal)
+    covariance = _error_state_covariance(calibration_covariance, nominal, names)
     contributions = {}
-    for label, sl, _ in CORE_SPANS:
+    for label, sl in source_spans(names):
         block = np.zeros_like(covariance)
         block[sl, sl] = covariance[sl, sl]
         contributions[f"residual {label}"] = propagate(initial(block, False), False)
-    zero = np.zeros((N_PARAMS, N_PARAMS))
+    zero = np.zeros((n_params, n_params))
     contributions["alignment noise"] = propagate(initial(zero, True), False)
     contributions["sensor noise in navigation"] = propagate(initial(zero, False), True)
     total = propagate(initial(covariance, True), True)
     return Budget(time, contributions, total)
 
 
-def _error_state_covariance(calibration_covariance: np.ndarray, nominal: np.ndarray) -> np.ndarray:
+def source_spans(names) -> list[tuple[str, slice]]:
+    """``(label, slice)`` of each parameter group among ``names`` (the 21's six, then the extra groups)."""
+    spans = [(label, sl) for label, sl, _ in CORE_SPANS]
+    for key in groups_in(names):
+        index = [names.index(n) for n in GROUPS[key].names if n in names]
+        spans.append((GROUPS[key].label, slice(min(index), max(index) + 1)))
+    return spans
+
+
+def alignment_map(w_b: np.ndarray, f_b: np.ndarray, dt: float, names=NAMES) -> np.ndarray:
+    """``d(phi_0)/dx`` (3, parameters) of the coarse alignment at rest: the 21's (eq. 15) and the extras'."""
+    core = alignment_sensitivity(np.tile(w_b * dt, (4, 1)), np.tile(f_b * dt, (4, 1)), dt)
+    rest_g, rest_a = rest_sensitivity(names, w_b, f_b)
+    return np.hstack([core, alignment_error(f_b, w_b, np.vstack([rest_a, rest_g]))])
+
+
+def _error_state_covariance(calibration_covariance: np.ndarray, nominal: np.ndarray, names=NAMES) -> np.ndarray:
     """Covariance of the paper's error terms (scale factors relative) from that of the values."""
-    scale = np.where(SCALE_MASK, np.abs(nominal), 1.0)
+    scale = np.where(relative_mask(names), np.abs(nominal), 1.0)
     return calibration_covariance / np.outer(scale, scale)
 
 
@@ -224,9 +253,9 @@ def white_noise_per_sample(problem) -> tuple[float, float]:
 
 
 def problem_budget(problem, nominal: np.ndarray, covariance: np.ndarray, orientation: str = "ENU",
-                   hours: float = 24.0) -> Budget:
-    """The error budget of a unit with the calibration covariance ``covariance`` (SI, about ``nominal``)
-    navigating at ``orientation`` on a problem's site, with its sensors' white noise."""
+                   hours: float = 24.0, names=NAMES) -> Budget:
+    """The error budget of a unit with the calibration covariance ``covariance`` (SI, about ``nominal``, the
+    parameters ``names``) navigating at ``orientation`` on a problem's site, with its sensors' white noise."""
     return error_budget(covariance, nominal, orientation_to_dcm(orientation), problem.site.latitude,
                         problem.site.height, problem.site.g, *white_noise_per_sample(problem), problem.rate_hz,
-                        duration_s=hours * 3600.0)
+                        duration_s=hours * 3600.0, names=names)

@@ -102,8 +102,8 @@ def recording_budget(rec: Recording, params: ParameterSet, orientation: str | No
         raise InputError(None, "the table has no sigma column; the budget needs the uncertainty")
     orientation = orientation or longest_static(rec).orientation
     noise = measured_white_noise(rec, params)
-    core = params.core
-    covariance = np.diag(np.nan_to_num(params.sigma[: len(core)]) ** 2)
-    budget = error_budget(covariance, core, orientation_to_dcm(orientation), rec.site.latitude, rec.site.height,
-                          rec.site.g, noise[0], noise[1], rec.rate_hz, duration_s=hours * 3600.0)
+    covariance = np.diag(np.nan_to_num(params.sigma) ** 2)
+    budget = error_budget(covariance, params.values, orientation_to_dcm(orientation), rec.site.latitude,
+                          rec.site.height, rec.site.g, noise[0], noise[1], rec.rate_hz, duration_s=hours * 3600.0,
+                          names=params.names)
     return budget, orientation, noise

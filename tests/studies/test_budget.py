@@ -63,3 +63,25 @@ def test_budget_splits_into_sources_that_add_up(kang_problem):
     np.testing.assert_allclose(summed[1:], budget.total[1:], rtol=1e-6)
     table = budget.table([3600.0, 86400.0])
     assert set(table["source"]) >= {"residual gyro bias", "alignment noise", "sensor noise in navigation", "total"}
+
+
+@pytest.mark.parametrize("sensor,axis", [("gyro", "z"), ("gyro", "x"), ("accel", "z")])
+def test_an_extra_groups_error_at_rest_acts_as_the_bias_its_physics_gives(kang_problem, sensor, axis):
+    """At rest in ENU (body z up) a g-sensitivity error on the up force axis is a gyro
+    bias error of g times it; a quadratic-scale error of the up accelerometer an accelerometer bias of g^2
+    times it: the budget's extra sources come from the groups' own corrections."""
+    g = kang_problem.site.g
+    if sensor == "gyro":
+        names, extra, factor = R.model_names(("gyro_gsens",)), f"gyro_gsens_{axis}z", g
+    else:
+        names, extra, factor = R.model_names(("quadratic",)), f"accel_quadratic_{axis}", g**2
+    nominal = np.concatenate([kang_problem.truth.core, np.zeros(len(names) - R.N_PARAMS)])
+    sigma = 1e-9
+    extra_cov = np.zeros((len(names), len(names)))
+    extra_cov[names.index(extra), names.index(extra)] = sigma**2
+    bias_cov = np.zeros_like(extra_cov)
+    k = names.index(f"{sensor}_bias_{axis}")
+    bias_cov[k, k] = (sigma * factor) ** 2
+    run = [B.problem_budget(kang_problem, nominal, cov, "ENU", 2.0, names).total for cov in (extra_cov, bias_cov)]
+    np.testing.assert_allclose(run[0], run[1], rtol=1e-6, atol=1e-9)
+    assert run[0][-1].max() > 1e-3

@@ -10,8 +10,9 @@ column, or the full covariance when one is known:
 
 Either must be symmetric, positive semi-definite and have the table's sigma as its diagonal root.
 Scale-factor errors are relative (``t_ii``), so the covariance of the values is divided by the values
-(as :mod:`casadi_sins.studies.budget` does).  Extra groups of an extended table (quadratic scale,
-lever arms, time offset) are not in the modulation model and are left out.
+(as :mod:`casadi_sins.studies.budget` does).  A table's gyro scale-factor asymmetry
+(``gyro_scale_asym_*``, the same term) is the model's ``dK*``; its other extra groups are not in the
+modulation model and are left out (named in the origin).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ import numpy as np
 from ...core.errors import InputError, shown
 from ...core.inputs import check_input_file
 from ...data.tables import read_table
+from ...model.groups.gyro_asym import NAMES as ASYMMETRY
 from ...model.registry import NAMES, relative_mask
 from ...report.calibration import companion_paths
 from . import model as M
@@ -169,15 +171,19 @@ def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sourc
         check_psd(cov, where)
         if not np.allclose(np.sqrt(np.diag(cov))[: len(NAMES)], params.sigma[: len(NAMES)], rtol=1e-3, atol=0.0):
             raise InputError(where, f"its diagonal does not match the sigma of {table}")
-    idx = [names.index(n) for n in NAMES]
+    kept = NAMES + tuple(n for n in ASYMMETRY if n in names)  # the table's asymmetry is the model's dK*
+    idx = [names.index(n) for n in kept]
     values, cov = params.values[idx], cov[np.ix_(idx, idx)]
-    scale = np.where(relative_mask(NAMES), np.abs(values), 1.0)
+    scale = np.where(relative_mask(kept), np.abs(values), 1.0)
     if np.any(scale == 0):
         raise InputError(table, "a scale factor of zero")
     p0 = np.zeros((M.N_STATE, M.N_STATE)) if sheet is None else sheet.p0.copy()
-    p0[M.N_NAV:M.N_NAV + len(NAMES), M.N_NAV:M.N_NAV + len(NAMES)] = cov / np.outer(scale, scale)
+    states = list(range(M.N_NAV, M.N_NAV + len(NAMES))) + list(range(M.GYRO_ASYM.start, M.GYRO_ASYM.stop))
+    states = states[:len(kept)]
+    p0[np.ix_(states, states)] = cov / np.outer(scale, scale)
     zero = np.zeros(3)
-    extra = f" (extra groups left out: {', '.join(names[len(NAMES):])})" if len(names) > len(NAMES) else ""
+    left = [n for n in names[len(NAMES):] if n not in kept]
+    extra = f" (extra groups left out: {', '.join(left)})" if left else ""
     return Sources(table.stem, p0, zero if sheet is None else sheet.gyro_arw,
                    zero if sheet is None else sheet.accel_vrw, correlated=where is not None,
                    origin=str(table) + (f" + {where}" if where is not None else "") + extra)

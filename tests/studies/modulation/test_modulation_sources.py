@@ -193,3 +193,13 @@ def test_alignment_makes_the_initial_tilt_cancel_the_accelerometer_bias(guan_she
     assert np.abs(prop.mean(aligned.initial_map() @ x)).max() < 1e-6  # m, round-off
     assert np.abs(prop.mean(x)[:, 2:]).max() > 100.0  # not aligned: ~ R * 3e-5 rad of Schuler swing
     assert set(GROUPS) >= {"gyro scale asymmetry", "initial heading"}
+
+
+def test_a_tables_gyro_scale_asymmetry_is_the_models_dk_star(tmp_path):
+    """The same term (``A_i |w_i|``): the table's sigma lands on the asymmetry states; g-sensitivity is named
+    as left out."""
+    rows = [f"gyro_scale_asym_{a},ppm,3,{s}" for a, s in zip("xyz", (0.05, 0.06, 0.07))]
+    rows += [f"gyro_gsens_{i}{j},deg/h/g,0.001,0.0001" for i in "xyz" for j in "xyz"]
+    src = table_sources(write_table(tmp_path, rows))
+    np.testing.assert_allclose(np.sqrt(np.diag(src.p0))[M.GYRO_ASYM], np.array([0.05, 0.06, 0.07]) * 1e-6)
+    assert "gyro_gsens_xx" in src.origin and "gyro_scale_asym_x" not in src.origin

@@ -58,8 +58,9 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
     p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
     p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
-                   help="parameters: the paper's 21 (default); extended: also accelerometer quadratic scale, lever "
-                   "arms and the gyro/accel time offset; auto: the extra groups the data support (nlp only)")
+                   help="parameters: the paper's 21 (default); extended: also every extra group (accelerometer "
+                   "quadratic and cross-quadratic terms, lever arms, gyro/accel time offset, gyro g-sensitivity and "
+                   "scale asymmetry); auto: the extra groups the data support (nlp only)")
     p.add_argument("--export", nargs="+", choices=list(EXPORTS),
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")

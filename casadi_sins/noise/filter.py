@@ -196,7 +196,7 @@ def _track_data(system, track: GroupTrack, noise: SensorNoise, layout: Layout, p
         raise RuntimeError("a step transition outside its sparsity pattern")
     col_of, row_of = np.nonzero(pattern.T)  # the nonzeros in column-major order
     lower_col, lower_row = np.nonzero(np.tril(np.ones((n, n), bool)).T)
-    cache = system.__dict__.setdefault("_rows", {})
+    cache = system.track_rows
     if id(track) not in cache:
         cache[id(track)] = _Rows(system, track, ends)
     rows = cache[id(track)]
@@ -249,7 +249,7 @@ def whiten(system, columns: np.ndarray, noise: SensorNoise) -> Whitened:
     pattern = transition_pattern(layout)
     chain = filter_chain(n, ncol, pattern.tobytes())
     key = search_key(noise, layout)
-    seen = system.__dict__.setdefault("_whitened", {})
+    seen = system.whitenings
     seen[key] = seen.get(key, 0) + 1  # from the third whitening on (a likelihood search), from components
     tracks = [_track_data(system, track, noise, layout, pattern, ncol, seen[key] > 2) for track in system.tracks]
     out = np.zeros_like(columns)

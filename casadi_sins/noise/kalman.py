@@ -63,6 +63,11 @@ class NoiseSystem:
         self.f_cross = skew(np.array([0.0, 0.0, gravity]))
         self.earth_cross = skew(np.asarray(earth_rate, dtype=float))
         self.rows = max((obs.row + 3 for t in tracks for obs in t.observations), default=0)
+        # the filter's caches, owned here and filled by noise.filter and noise.steps: per track its packed
+        # observation rows; per search key how often it was whitened; per key and track the variance components
+        self.track_rows: dict = {}
+        self.whitenings: dict = {}
+        self.components: dict = {}
 
     # ------------------------------------------------------------------ discretisation
     def transitions(self, track: GroupTrack, noise: SensorNoise, layout: Layout):

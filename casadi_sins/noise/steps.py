@@ -142,7 +142,7 @@ def composed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout
     if not repeated:
         return observed_steps(system, track, noise, layout)[:3]
     key = search_key(noise, layout) + (id(track),)
-    cache = system.__dict__.setdefault("_components", {})
+    cache = system.components
     if key not in cache:
         cache[key] = observed_steps(system, track, noise, layout, components=True)[:3]
     ends, phi, q = cache[key]

@@ -38,7 +38,7 @@ from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import table_text
-from ..model.registry import NAMES, natural_scale_of, natural_unit_of, relative_mask
+from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, relative_mask
 from ..report.calibration import companion_paths, recording_hash, report_files
 from ..report.tables import frame_files
 from .parallel import run_all
@@ -162,18 +162,19 @@ def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> p
     """Per parameter across the units that calibrated: median, robust spread and outliers (natural units;
     scale factors in ppm about the median)."""
     ok = fleet[fleet["status"] != "failed"]
-    names = [n for n in NAMES if n in ok.columns]
+    names = [n for n in ALL_NAMES if n in ok.columns]  # the 21 and every extra group some unit has
     rows = []
     for name, scale, relative in zip(names, natural_scale_of(names), relative_mask(names)):
-        values = ok[name].to_numpy(dtype=float)
-        sigma = ok[f"{name}_sigma"].to_numpy(dtype=float)
+        units = ok[np.isfinite(ok[name].to_numpy(dtype=float))]  # units whose model had the parameter
+        values = units[name].to_numpy(dtype=float)
+        sigma = units[f"{name}_sigma"].to_numpy(dtype=float)
         median = float(np.median(values)) if len(values) else math.nan
         natural = (values / median - 1.0) / scale if relative else (values - median) / scale
         nat_sigma = sigma / (np.abs(values) if relative else 1.0) / scale
         robust = 1.4826 * float(np.median(np.abs(natural))) if len(values) else math.nan
         unit_sigma = float(np.nanmedian(nat_sigma)) if np.isfinite(nat_sigma).any() else 0.0
         reference = max(robust, unit_sigma)
-        outliers = [u for u, x in zip(ok["unit_id"], natural) if reference > 0 and abs(x) > threshold * reference]
+        outliers = [u for u, x in zip(units["unit_id"], natural) if reference > 0 and abs(x) > threshold * reference]
         rows.append({"parameter": name, "unit": natural_unit_of(name), "units": len(values),
                      "median (SI)": median, "robust spread": robust, "std": float(np.std(natural, ddof=1))
                      if len(values) > 1 else math.nan, "min": float(natural.min()) if len(values) else math.nan,

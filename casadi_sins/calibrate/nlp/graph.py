@@ -161,7 +161,7 @@ class ResidualGraph:
 
 def _buffered(shape: ShapeGraph, name: str) -> Buffered:
     """One buffered caller per shape function (shared by the recordings of the shape)."""
-    calls = shape.__dict__.setdefault("_buffered", {})
+    calls = shape.buffered
     if name not in calls:
         calls[name] = Buffered(getattr(shape, name))
     return calls[name]

@@ -218,6 +218,7 @@ class ShapeGraph:
 
     def __init__(self, layouts: list[GroupLayout], names: tuple[str, ...], compiled: bool = True):
         self.layouts, self.names = list(layouts), tuple(names)
+        self.buffered: dict = {}  # the buffered callers of its functions (calibrate.nlp.graph), shared by recordings
         tangent, nominal = step_blocks(tuple(names), compiled)
         sym = _Symbols(layouts, tuple(names))
         self.n_variables = sym.n_variables

@@ -30,12 +30,17 @@ def factor_low(dof: float) -> float:
     return max(0.0, 1.0 - Z_LIMIT * np.sqrt(2.0 / max(dof, 1.0)) - MODEL_TOLERANCE)
 
 
-def separation_warnings(params: ParameterSet, wander: dict | None = None) -> tuple[list[Check], list[str]]:
+#: The remedy a weak parameter's warning names, when no term outside the model explains the misfit.
+SCHEDULE_REMEDY = "turn the unit about more axes or longer"
+
+
+def separation_warnings(params: ParameterSet, wander: dict | None = None,
+                        remedy: str = SCHEDULE_REMEDY) -> tuple[list[Check], list[str]]:
     """Checks and warnings of an estimate's separability: weak parameters, inseparable pairs, condition.
 
     ``wander`` (sensor -> :class:`noise.wander.SensorWander`): the biases of a sensor whose bias instability
     was included are not called weak, their sigma carries the wander's mean by design (its own warning
-    says so), not a schedule that cannot determine them.
+    says so), not a schedule that cannot determine them.  ``remedy`` ends the weak parameters' warning.
 
     Returns ``(checks, warnings)``.
     """
@@ -53,7 +58,7 @@ def separation_warnings(params: ParameterSet, wander: dict | None = None) -> tup
     if found.weak:
         warnings.append("the schedule does not determine " + ", ".join(f"{n} (sigma {s:.3g} {u})"
                                                                        for n, s, u in found.weak[:8])
-                        + (", ..." if len(found.weak) > 8 else "") + ": turn the unit about more axes or longer")
+                        + (", ..." if len(found.weak) > 8 else "") + f": {remedy}")
     if found.correlated:
         warnings.append("the schedule cannot separate " + ", ".join(f"{a} from {b} (correlation {c:+.4f})"
                                                                    for a, b, c in found.correlated[:5])

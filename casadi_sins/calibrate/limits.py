@@ -56,7 +56,8 @@ def separation_warnings(params: ParameterSet, wander: dict | None = None,
                     f"{found.condition:.3g}")]
     warnings = []
     if found.weak:
-        warnings.append("the schedule does not determine " + ", ".join(f"{n} (sigma {s:.3g} {u})"
+        lead = "the schedule" if remedy == SCHEDULE_REMEDY else "this fit"
+        warnings.append(f"{lead} does not determine " + ", ".join(f"{n} (sigma {s:.3g} {u})"
                                                                        for n, s, u in found.weak[:8])
                         + (", ..." if len(found.weak) > 8 else "") + f": {remedy}")
     if found.correlated:

@@ -1,5 +1,7 @@
 """The output model beyond the 21 parameters (issue 10): quadratic scale, lever arms, time offset."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -91,3 +93,14 @@ def test_peer_recording_with_the_extended_model_meets_its_truth(peer_recording, 
     for name, truth in PEER_EXTRAS.items():
         scale = {"accel_time_offset": 0.05e-3}.get(name, 1e-6 / G0 if "quadratic" in name else 2e-3)
         assert abs(params[name] - truth) < scale, (name, params[name], truth)
+
+
+def test_the_21_on_a_unit_with_accelerometer_extras_name_them_not_the_schedule(extended_problem):
+    """The default model on the unit with Ka2, lever arms and a time offset: the misfit is named as those
+    groups with --model auto as the remedy, neither a bias instability nor the schedule is blamed."""
+    short = dataclasses.replace(extended_problem, timing=dataclasses.replace(extended_problem.timing, static_s=40.0))
+    result = calibrate_nlp(simulate(short, seed=5).recording)
+    named = [w for w in result.warnings if "--model auto" in w and "explained by terms outside" in w]
+    assert len(named) == 1 and all(g in named[0] for g in ("(quadratic,", "(lever,", "(timing,"))
+    assert "gyro_gsens" not in named[0]
+    assert not any("turn the unit" in w or "bias instability beyond" in w for w in result.warnings)

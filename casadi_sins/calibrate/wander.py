@@ -111,7 +111,8 @@ def natural_size(sensor: str, value: float) -> str:
 def describe(estimates: dict[str, SensorWander]) -> str | None:
     """The warning when the static data show bias instability without a datasheet (``None`` when not)."""
     parts = [f"{SENSOR_WORDS[s][0]} {natural_size(s, w.sigma)} (likelihood ratio "
-             f"{w.lr:.3g})" for s, w in estimates.items() if w.included and w.lr > WARN_LR]
+             f"{w.lr:.3g}{'; at the ceiling of the search: not bounded by the data' if w.at_ceiling else ''})"
+             for s, w in estimates.items() if w.included and w.lr > WARN_LR]
     if not parts:
         return None
     tau = next(iter(estimates.values())).tau

@@ -38,6 +38,8 @@ ROUNDS = 3
 #: Directions of the unit-scaled responses below this share of their Gram matrix are dropped (rounding: the
 #: sum of a sensor axis' pieces is a bias, in the span of the Jacobian).
 GRAM_FLOOR = 1e-12
+#: A size above this fraction of the search range's top is at its ceiling.
+CEILING_FRACTION = 0.99
 
 
 @dataclasses.dataclass
@@ -59,6 +61,8 @@ class SensorWander:
     mismatch : bool
         Left out because an acceleration constant in each static segment fits the misfit better
         (model mismatch, left to the checks).
+    at_ceiling : bool
+        The size is at the top of the search range: the data set it no limit (flagged in the warning).
     """
 
     sigma: float
@@ -67,6 +71,7 @@ class SensorWander:
     tau: float
     included: bool = False
     mismatch: bool = False
+    at_ceiling: bool = False
 
 
 def exponential_kernel(times: np.ndarray, tau: float) -> np.ndarray:
@@ -241,5 +246,6 @@ class BiasWander:
         out = {}
         for term in terms:
             profile = self.profile(term, sigma)
-            out[term] = SensorWander(sigma[term], profile.lr(sigma[term]), profile.upper(sigma[term]), self.tau)
+            out[term] = SensorWander(sigma[term], profile.lr(sigma[term]), profile.upper(sigma[term]), self.tau,
+                                     at_ceiling=sigma[term] >= CEILING_FRACTION * profile.bounds[1])
         return out

@@ -88,3 +88,13 @@ def test_biases_whose_wander_is_included_are_not_blamed_on_the_schedule(kang_nlp
     assert "accel_bias_x" not in with_wander[0] and "gyro_scale_x" in with_wander[0]
     not_included = {"accel": SensorWander(2e-5, 1.0, 4e-5, 600.0, included=False)}
     assert "accel_bias_x" in separation_warnings(weak, not_included)[1][0]
+
+
+def test_a_wander_at_the_ceiling_of_its_search_is_flagged():
+    """A wander the data do not bound (its size at the top of the search) says so in its warning."""
+    from casadi_sins.calibrate.wander import describe
+    from casadi_sins.noise.wander import SensorWander
+
+    free = {"gyro": SensorWander(1e-7, 1e3, np.inf, 600.0, included=True)}
+    top = {"gyro": SensorWander(1e-7, 1e3, np.inf, 600.0, included=True, at_ceiling=True)}
+    assert "ceiling" not in describe(free) and "at the ceiling of the search" in describe(top)

@@ -277,7 +277,7 @@ def test_repeated_whitening_from_variance_components_equals_the_oracle(short_gra
         white = system.whiten(columns, noise)
         assert np.all(np.abs(white.columns - expected) <= 1e-9 * np.abs(expected).max(axis=0))
         assert white.log_det == pytest.approx(log_det, rel=1e-12)
-    assert system.__dict__.get("_components"), "the components were not used"
+    assert system.components, "the components were not used"
 
 
 def test_filter_on_the_virtual_machine_equals_the_compiled_one(short_graph, monkeypatch):

@@ -103,9 +103,7 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
         turns the aligned heading by degrees and tilts it by the sway's amplitude, which the method
         takes for sensor errors), the equations are rank deficient or the iteration does not converge.
     """
-    _check_applicable(rec, model)
-    if progress:
-        progress(f"ils: {FITS}")
+    _check_applicable(rec, model, progress)
     t_start = time.perf_counter()
     initial = initial or rough_parameters(rec)
     params = initial.core.copy()
@@ -190,8 +188,11 @@ def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: Noi
     return checks + separation_checks
 
 
-def _check_applicable(rec: Recording, model) -> None:
-    """Refuse what the paper's method cannot do: the extended model, groups too long to hold in memory."""
+def _check_applicable(rec: Recording, model, progress=None) -> None:
+    """Refuse what the paper's method cannot do: the extended model, groups too long to hold in memory;
+    say what it fits (:data:`FITS`)."""
+    if progress:
+        progress(f"ils: {FITS}")
     if model not in ("21", None, ()):
         raise CalibrationError(f"{FITS}; use the nlp solver for the extended model")
     longest = max(rec.group_samples(g).stop - rec.group_samples(g).start for g in rec.group_ids)

@@ -45,7 +45,7 @@ def thermal_csv_text(model: ThermalModel) -> str:
     low, high = model.range_c
     for i, name in enumerate(model.names):
         c, s = model.coefficients[i], sigma[i]
-        fields = [name, unit_of(name), repr(c[0]), _num(s[0]), repr(c[1]), _num(s[1]), repr(c[2]), _num(s[2]),
+        fields = [name, unit_of(name), _num(c[0]), _num(s[0]), _num(c[1]), _num(s[1]), _num(c[2]), _num(s[2]),
                   str(int(model.orders[i])), repr(float(model.reference_c)), repr(float(low)), repr(float(high))]
         lines.append(",".join(fields))
     return "\n".join(lines) + "\n"

@@ -23,6 +23,7 @@ from ...core.errors import InputError, shown
 from ...data.tables import read_table
 from ...model.parameters import ParameterSet
 from ...report.calibration import companion_paths
+from ...report.provenance import read_provenance
 from ..modulation.calibrated import check_psd, report_covariance
 from .fit import Point
 
@@ -89,8 +90,10 @@ def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, li
     return Point(float(temperature), params, str(path)), notes
 
 
-def load_points(specs: list[str], temperatures: list[float] | None = None) -> tuple[list[Point], list[str]]:
-    """Every calibration (:func:`load_point`), on the parameters they share, ordered by temperature.
+def load_points(specs: list[str], temperatures: list[float] | None = None
+                ) -> tuple[list[Point], list[str], str | None]:
+    """Every calibration (:func:`load_point`), on the parameters they share, ordered by temperature;
+    notes; the unit id their reports name (None when none does).
 
     Raises
     ------
@@ -107,13 +110,16 @@ def load_points(specs: list[str], temperatures: list[float] | None = None) -> tu
         point, more = load_point(spec, None if temperatures is None else temperatures[k])
         points.append(point)
         notes += more
+    units = {read_provenance(p.label).unit_id for p in points} - {None}
+    if len(units) > 1:
+        raise InputError(None, f"the tables are of units {', '.join(sorted(units))}: a thermal model is of one unit")
     names = [n for n in points[0].params.names if all(n in p.params.names for p in points)]
     dropped = sorted({n for p in points for n in p.params.names} - set(names))
     if dropped:
         notes.append(f"parameters not in every table left out: {', '.join(dropped)}")
     points = [Point(p.temperature_c, _subset(p.params, names), p.label) for p in points]
     points.sort(key=lambda p: p.temperature_c)
-    return points, notes
+    return points, notes, next(iter(units), None)
 
 
 def _subset(params: ParameterSet, names: list[str]) -> ParameterSet:

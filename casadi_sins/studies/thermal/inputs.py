@@ -12,7 +12,6 @@ note).  Its temperature, first found of:
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import InputError, shown
+from ...data.conditions import TEMPERATURE_RANGE_C
 from ...data.tables import read_table
 from ...model.parameters import ParameterSet
 from ...report.calibration import companion_paths
@@ -39,20 +39,12 @@ def split_spec(spec: str) -> tuple[str, float | None]:
 
 
 def report_temperature(table: Path) -> float | None:
-    """The temperature (degC) in the table's companion report, if it has one."""
-    path = companion_paths(table)[0]
-    if not path.exists():
-        return None
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None  # report_covariance names an unreadable report
-    conditions = doc.get("conditions") if isinstance(doc, dict) else None
-    value = conditions.get("temperature_c") if isinstance(conditions, dict) else None
+    """The temperature (degC) in the conditions of the table's companion report, if it gives one."""
+    value = read_provenance(table).conditions.get("temperature_c")
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(path, f"conditions.temperature_c {shown(value)} is not a number")
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(companion_paths(table)[0], f"conditions.temperature_c {shown(value)} is not a number")
     return float(value)
 
 
@@ -74,8 +66,9 @@ def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, li
     if temperature is None:
         raise InputError(path, "no temperature: its report has no conditions.temperature_c; give it as "
                          f"{path_text}@TEMP or with --temperatures")
-    if not -100.0 <= temperature <= 200.0:
-        raise InputError(path, f"temperature {temperature:g} degC is outside -100..200 degC")
+    low, high = TEMPERATURE_RANGE_C
+    if not low <= temperature <= high:
+        raise InputError(path, f"temperature {temperature:g} degC is outside {low:g}..{high:g} degC (a typo? Kelvin?)")
     if params.sigma is None or np.any(~np.isfinite(params.sigma)):
         raise InputError(path, "no sigma for every parameter: a thermal fit weighs each calibration by it")
     cov, where = report_covariance(path, params.names)

@@ -6,11 +6,16 @@ from __future__ import annotations
 import argparse
 
 from ..core.files import write_files
+from ..data.conditions import recording_temperature_c
+from ..data.tables import read_table
+from ..data.thermal import read_thermal
+from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.thermal.fit import fit_thermal
 from ..studies.thermal.inputs import load_points
 from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
+from .commands import CliError
 
 
 def add_thermal_command(sub) -> None:
@@ -58,3 +63,43 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     written = ["thermal.csv", "thermal.json", "thermal.md"] + [at_name(t) for t in args.at]
     print(f"wrote {args.out}/{{{','.join(written)}}}" + ("" if args.no_plots else " and plots"))
     return 0
+
+
+def add_thermal_apply_options(p) -> None:
+    """``apply --thermal thermal.csv [--temperature-c T]``: the table of a thermal model at the recording's temperature."""
+    p.add_argument("--thermal", metavar="thermal.csv", help="a thermal model (from thermal) instead of a table: "
+                   "the table at --temperature-c, else at the recording's temperature (its [conditions] "
+                   "temperature_c, or the mean of its temperature column over the rests)")
+    p.add_argument("--temperature-c", type=float, help="temperature of the unit, degC (with --thermal)")
+
+
+def apply_inputs(args) -> tuple[str, str]:
+    """``(table or thermal model, recording)`` of ``apply``: with ``--thermal`` the one positional is the recording."""
+    given = [a for a in (args.table, args.recording) if a is not None]
+    if args.thermal:
+        if len(given) != 1:
+            raise CliError("with --thermal give the recording alone (the thermal model replaces the table)")
+        return args.thermal, given[0]
+    if args.temperature_c is not None:
+        raise CliError("--temperature-c goes with --thermal (a table is of one temperature)")
+    if len(given) != 2:
+        raise CliError("apply needs a parameter table and a recording (or --thermal thermal.csv and a recording)")
+    return args.table, args.recording
+
+
+def apply_parameters(args, table: str, rec) -> tuple[ParameterSet, list[str]]:
+    """The parameters to apply and a note on where they come from (the thermal model at which temperature)."""
+    if not args.thermal:
+        return read_table(table), []
+    model = read_thermal(table)
+    temperature, source = args.temperature_c, "--temperature-c"
+    if temperature is None:
+        temperature, source = recording_temperature_c(rec), "the recording"
+    if temperature is None:
+        raise CliError(f"{rec.label}: no temperature ([conditions] temperature_c or a temperature column): give "
+                       "--temperature-c")
+    notes = [f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})"]
+    if model.extrapolates(temperature):
+        notes.append(f"{temperature:.4g} degC is beyond the calibrated range {model.range_c[0]:g} .. "
+                     f"{model.range_c[1]:g} degC: the table is extrapolated")
+    return model.at(temperature), notes

@@ -6,11 +6,11 @@ import argparse
 
 from ..core.version import __version__
 from ..report.exports import EXPORTS
-from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
+from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
-from .thermal import add_thermal_command
+from .thermal import add_thermal_command, cmd_export_any
 
 
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
@@ -80,12 +80,12 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
 
     p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML, C header) or PSINS "
                        "clbt text, with the provenance from the table's companion report")
-    p.add_argument("table", help="parameter table CSV")
+    p.add_argument("table", help="parameter table CSV (or a thermal model thermal.csv: --format c only)")
     p.add_argument("--format", required=True, choices=list(EXPORTS), help="json or yaml: compensation matrices; "
                    "psins: the PSINS clbt struct; c: a C header for firmware (float64 arrays, inline function)")
     p.add_argument("--out", required=True, help="file to write")
     p.add_argument("--unit-id", help="serial number of the unit")
-    p.set_defaults(func=cmd_export)
+    p.set_defaults(func=cmd_export_any)  # a thermal.csv exports as a C header with casadi_sins_compensate_t
 
     p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")
     p.add_argument("recording", help="recording description NAME.toml")

@@ -4,18 +4,22 @@ Parsing and printing only; the work is in :mod:`studies.thermal`."""
 from __future__ import annotations
 
 import argparse
+import json
 
-from ..core.files import write_files
+from ..core.errors import InputError
+from ..core.files import atomic_write_text, write_files
+from ..core.inputs import first_line
 from ..data.conditions import recording_temperature_c
 from ..data.tables import read_table
-from ..data.thermal import read_thermal
+from ..data.thermal import companion_path, read_thermal
 from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.thermal.fit import fit_thermal
 from ..studies.thermal.inputs import load_points
 from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
-from .commands import CliError
+from ..report.cheader_thermal import c_header_thermal
+from .commands import CliError, cmd_export
 
 
 def add_thermal_command(sub) -> None:
@@ -103,3 +107,38 @@ def apply_parameters(args, table: str, rec) -> tuple[ParameterSet, list[str]]:
         notes.append(f"{temperature:.4g} degC is beyond the calibrated range {model.range_c[0]:g} .. "
                      f"{model.range_c[1]:g} degC: the table is extrapolated")
     return model.at(temperature), notes
+
+
+def cmd_export_any(args) -> int:
+    """``export``: a parameter table (:func:`commands.cmd_export`), or a thermal model as a C header."""
+    if not is_thermal_file(args.table):
+        return cmd_export(args)
+    if args.format != "c":
+        raise CliError(f"{args.table}: a thermal model exports as --format c (casadi_sins_compensate_t); for the "
+                       f"{args.format} form of one temperature use thermal --at T and export that table")
+    model = read_thermal(args.table)
+    metadata = {"unit_id": args.unit_id or _thermal_unit_id(args.table), "thermal_model": str(args.table)}
+    try:
+        text = c_header_thermal(model, metadata)
+    except ValueError as exc:
+        raise CliError(f"{args.table}: {exc}") from None
+    atomic_write_text(args.out, text)
+    print(f"wrote {args.out} (c, thermal: casadi_sins_compensate_t)")
+    return 0
+
+
+def is_thermal_file(path) -> bool:
+    """Whether a CSV is a thermal model (its header has ``p_ref``), not a parameter table."""
+    try:
+        return "p_ref" in first_line(path).split(",")
+    except (OSError, InputError):
+        return False  # read_table names the problem
+
+
+def _thermal_unit_id(path) -> str | None:
+    try:
+        doc = json.loads(companion_path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    unit = doc.get("unit_id") if isinstance(doc, dict) else None
+    return unit if isinstance(unit, str) else None

@@ -12,14 +12,16 @@ from ..core.inputs import first_line
 from ..data.conditions import recording_temperature_c
 from ..data.tables import read_table
 from ..data.thermal import companion_path, read_thermal
+from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.thermal.fit import fit_thermal
 from ..studies.thermal.inputs import load_points
 from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
+from ..studies.thermal.simulate import simulate_thermal, thermal_simulation_files
 from ..report.cheader_thermal import c_header_thermal
-from .commands import CliError, cmd_export
+from .commands import CliError, cmd_export, cmd_simulate
 
 
 def add_thermal_command(sub) -> None:
@@ -142,3 +144,20 @@ def _thermal_unit_id(path) -> str | None:
         return None
     unit = doc.get("unit_id") if isinstance(doc, dict) else None
     return unit if isinstance(unit, str) else None
+
+
+def cmd_simulate_any(args) -> int:
+    """``simulate``: a problem (:func:`commands.cmd_simulate`), or a thermal problem: one recording per setpoint."""
+    if not has_thermal(args.problem):
+        return cmd_simulate(args)
+    if args.start_attitude_deg is not None or args.quantize or args.name:
+        raise CliError("--start-attitude-deg, --quantize and --name are for a single recording; set them in the "
+                       "thermal problem's [errors] and name")
+    tp = load_thermal_problem(args.problem)
+    sims = simulate_thermal(tp, seed=args.seed, noise=not args.no_noise)
+    write_files(thermal_simulation_files(tp, sims, args.out))
+    for sim in sims:
+        print(f"wrote {args.out}/{sim.recording.file_stem}.toml (+ .csv, .truth.csv): "
+              f"{sim.recording.conditions.temperature_c:g} degC")
+    print(f"wrote {args.out}/thermal-truth.csv (the unit's true temperature model)")
+    return 0

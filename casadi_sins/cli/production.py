@@ -16,14 +16,14 @@ from ..data.tolerance import read_tolerance_sheet
 from ..report.provenance import read_provenance
 from ..report.rounding import format_sigma, format_with_sigma
 from ..report.tables import frame_files
-from ..studies.apply import apply_files, apply_table
+from ..studies.apply import apply_files
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
-from .thermal import add_thermal_apply_options, apply_inputs, apply_parameters
+from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
 
 
 def _number(x) -> str:
@@ -34,9 +34,7 @@ def cmd_apply(args) -> int:
     """``apply``: a recording compensated with a table, and its check against gravity and the Earth rate."""
     table, recording = apply_inputs(args)
     rec = refine(read_recording(recording))
-    params, source_note = apply_parameters(args, table, rec)
-    applied = apply_table(rec, params)
-    applied.notes.extend(source_note)
+    applied = applied_recording(args, table, rec)
     origin = read_provenance(table)
     write_files(apply_files(applied, args.out, str(table), origin.table_sha256))
     if not applied.check.empty:

@@ -9,13 +9,13 @@ import json
 from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
 from ..core.inputs import first_line
-from ..data.conditions import recording_temperature_c
 from ..data.tables import read_table
 from ..data.thermal import companion_path, read_thermal
 from ..data.thermal_problem import has_thermal, load_thermal_problem
-from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of
 from ..report.rounding import format_sigma, format_with_sigma
+from ..studies.apply import Applied, apply_table
+from ..studies.thermal.apply import apply_thermal
 from ..studies.thermal.fit import fit_thermal
 from ..studies.thermal.inputs import load_points
 from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
@@ -93,22 +93,22 @@ def apply_inputs(args) -> tuple[str, str]:
     return args.table, args.recording
 
 
-def apply_parameters(args, table: str, rec) -> tuple[ParameterSet, list[str]]:
-    """The parameters to apply and a note on where they come from (the thermal model at which temperature)."""
+def applied_recording(args, table: str, rec) -> Applied:
+    """The recording compensated with the table, or with the thermal model at ``--temperature-c``, else at the
+    recording's ``[conditions] temperature_c``, else sample by sample at its temperature column."""
     if not args.thermal:
-        return read_table(table), []
+        return apply_table(rec, read_table(table))
     model = read_thermal(table)
     temperature, source = args.temperature_c, "--temperature-c"
-    if temperature is None:
-        temperature, source = recording_temperature_c(rec), "the recording"
-    if temperature is None:
+    if temperature is None and rec.conditions.temperature_c is not None:
+        temperature, source = rec.conditions.temperature_c, "the recording's [conditions]"
+    if temperature is None and rec.temperature is None:
         raise CliError(f"{rec.label}: no temperature ([conditions] temperature_c or a temperature column): give "
                        "--temperature-c")
-    notes = [f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})"]
-    if model.extrapolates(temperature):
-        notes.append(f"{temperature:.4g} degC is beyond the calibrated range {model.range_c[0]:g} .. "
-                     f"{model.range_c[1]:g} degC: the table is extrapolated")
-    return model.at(temperature), notes
+    applied = apply_thermal(rec, model, temperature)
+    if temperature is not None:
+        applied.notes.insert(0, f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})")
+    return applied
 
 
 def cmd_export_any(args) -> int:

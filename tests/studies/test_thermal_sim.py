@@ -49,7 +49,7 @@ def test_apply_thermal_at_the_recordings_temperature_is_the_table_at_that_temper
     assert main(["simulate", str(_short_thermal_problem(tmp_path)), "--out", str(sim), "--no-noise"]) == 0
     rec = str(sim / "thermal-kang2013-m30C.toml")
     assert main(["apply", "--thermal", str(sim / "thermal-truth.csv"), rec, "--out", str(tmp_path / "a")]) == 0
-    assert "-30 degC (from the recording)" in capsys.readouterr().out
+    assert "-30 degC (from the recording's [conditions])" in capsys.readouterr().out
     assert main(["apply", str(sim / "thermal-kang2013-m30C.truth.csv"), rec, "--out", str(tmp_path / "b")]) == 0
     a, b = (read_recording(tmp_path / d / "thermal-kang2013-m30C-compensated.toml") for d in "ab")
     np.testing.assert_allclose(a.accel, b.accel, rtol=1e-13, atol=1e-18)
@@ -60,3 +60,28 @@ def test_apply_thermal_at_the_recordings_temperature_is_the_table_at_that_temper
     assert not np.allclose(c.accel, a.accel, rtol=1e-9, atol=0)
     assert main(["apply", str(sim / "thermal-kang2013-m30C.truth.csv"), rec, "--out", str(tmp_path / "d"),
                  "--temperature-c", "60"]) == 2  # a table is of one temperature
+
+
+def test_apply_thermal_sample_by_sample_at_the_temperature_column(tmp_path):
+    """A recording with a temperature column (no [conditions]) is compensated at each sample's temperature."""
+    import dataclasses
+
+    from casadi_sins.core.files import write_files
+    from casadi_sins.data.conditions import Conditions
+    from casadi_sins.data.description import recording_files
+    from casadi_sins.model.output import compensate
+
+    sim = tmp_path / "sim"
+    assert main(["simulate", str(_short_thermal_problem(tmp_path)), "--out", str(sim), "--no-noise"]) == 0
+    rec = read_recording(sim / "thermal-kang2013-m30C.toml")
+    ramp = np.linspace(-30.0, 20.0, len(rec.time))
+    write_files(recording_files(dataclasses.replace(rec, conditions=Conditions(), temperature=ramp),
+                                tmp_path / "ramp.toml"))
+    assert main(["apply", "--thermal", str(sim / "thermal-truth.csv"), str(tmp_path / "ramp.toml"),
+                 "--out", str(tmp_path / "a")]) == 0
+    got = read_recording(tmp_path / "a" / "thermal-kang2013-m30C-compensated.toml")
+    model = read_thermal(sim / "thermal-truth.csv")
+    for k in (0, len(ramp) // 2, len(ramp) - 1):
+        dtheta, dv = compensate(rec.gyro[k:k + 1], rec.accel[k:k + 1], model.values_at(round(ramp[k], 2)), rec.dt)
+        np.testing.assert_allclose(got.gyro[k], dtheta[0], rtol=1e-12, atol=1e-20)
+        np.testing.assert_allclose(got.accel[k], dv[0], rtol=1e-12, atol=1e-20)

@@ -99,33 +99,40 @@ def at_report(model: ThermalModel, temperature_c: float, unit_id: str | None) ->
 
 
 def plot_group(fit: ThermalFit, key: str) -> bytes | None:
-    """Each parameter of a group against temperature: the calibrations with error bars, the fit and its 1-sigma band
-    (natural units, relative to ``p_ref``)."""
+    """Each parameter of a group against temperature (natural units, relative to ``p_ref``): above, the
+    calibrations with error bars and the fitted curve; below, each calibration's residual from the curve with its
+    error bar and the curve's 1-sigma band (where a bad run or hysteresis shows)."""
     names = [n for n in GROUPS[key].names if n in fit.model.names]
     if not names:
         return None
     plt = pyplot()
-    fig, axes = plt.subplots(1, len(names), figsize=(3.6 * len(names), 3.2), squeeze=False)
+    fig, axes = plt.subplots(2, len(names), figsize=(3.6 * len(names), 5.4), squeeze=False, sharex=True)
     m = fit.model
-    low, high = m.range_c
-    grid = np.linspace(min(low, m.reference_c) - 5, max(high, m.reference_c) + 5, 80)
+    grid = np.linspace(min(m.range_c[0], m.reference_c) - 5, max(m.range_c[1], m.reference_c) + 5, 80)
     size = natural_scale_of(m.names) * np.where(relative_mask(m.names), np.abs(m.coefficients[:, 0]), 1.0)
-    for ax, name in zip(axes[0], names):
+    temps = np.array([p.temperature_c for p in fit.points])
+    for column, name in enumerate(names):
         i = m.names.index(name)
+        top, bottom = axes[0][column], axes[1][column]
         curve = (m.values_at(grid)[:, i] - m.coefficients[i, 0]) / size[i]
-        band = np.array([np.sqrt(m.at(t).covariance[i, i]) if m.covariance is not None else np.nan
-                         for t in grid]) / size[i]
-        ax.plot(grid, curve, color="C0", label=f"fit (order {m.orders[i]})")
-        ax.fill_between(grid, curve - band, curve + band, color="C0", alpha=0.2)
-        temps = [p.temperature_c for p in fit.points]
-        vals = [(p.params.values[i] - m.coefficients[i, 0]) / size[i] for p in fit.points]
-        errs = [p.params.sigma[i] / size[i] for p in fit.points]
-        ax.errorbar(temps, vals, yerr=errs, fmt="o", color="C3", capsize=3, label="calibrations")
-        ax.set_title(name, fontsize=9)
-        ax.set_xlabel("temperature (degC)")
-        ax.set_ylabel(f"p - p_ref ({natural_unit_of(name)})")
-        ax.grid(alpha=0.3)
+        band = np.array([np.sqrt(m.at(t).covariance[i, i]) for t in grid]) / size[i] if m.covariance is not None \
+            else np.zeros_like(grid)
+        vals = np.array([p.params.values[i] for p in fit.points])
+        errs = np.array([p.params.sigma[i] for p in fit.points]) / size[i]
+        top.plot(grid, curve, color="C0", label=f"fit (order {m.orders[i]})")
+        top.errorbar(temps, (vals - m.coefficients[i, 0]) / size[i], yerr=errs, fmt="o", color="C3", capsize=3,
+                     label="calibrations")
+        top.set_title(name, fontsize=9)
+        top.set_ylabel(f"p - p_ref ({natural_unit_of(name)})")
+        bottom.fill_between(grid, -band, band, color="C0", alpha=0.2, label="fit 1-sigma")
+        bottom.axhline(0.0, color="C0", lw=0.8)
+        bottom.errorbar(temps, (vals - m.values_at(temps)[:, i]) / size[i], yerr=errs, fmt="o", color="C3", capsize=3)
+        bottom.set_xlabel("temperature (degC)")
+        bottom.set_ylabel(f"residual ({natural_unit_of(name)})")
+        for ax in (top, bottom):
+            ax.grid(alpha=0.3)
     axes[0][0].legend(fontsize=7)
+    axes[1][0].legend(fontsize=7)
     fig.tight_layout()
     return figure_bytes(fig)
 

@@ -9,10 +9,12 @@ import json
 from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
 from ..core.inputs import first_line
+from ..data.conditions import TEMPERATURE_RANGE_C
 from ..data.tables import read_table
 from ..data.thermal import companion_path, read_thermal
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
+from ..report.cheader_thermal import c_header_thermal
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Applied, apply_table
 from ..studies.thermal.apply import apply_thermal
@@ -20,7 +22,6 @@ from ..studies.thermal.fit import fit_thermal
 from ..studies.thermal.inputs import load_points
 from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
 from ..studies.thermal.simulate import simulate_thermal, thermal_simulation_files
-from ..report.cheader_thermal import c_header_thermal
 from .commands import CliError, cmd_export, cmd_simulate
 
 
@@ -45,6 +46,10 @@ def add_thermal_command(sub) -> None:
 
 def cmd_thermal(args: argparse.Namespace) -> int:
     """``thermal``: fit, write every file together, print the coefficients and the warnings."""
+    low, high = TEMPERATURE_RANGE_C
+    for t in [args.reference_c, *args.at]:
+        if not low <= t <= high:
+            raise CliError(f"temperature {t:g} degC (--reference-c or --at) is outside {low:g}..{high:g} degC")
     points, notes, unit_id = load_points(args.tables, args.temperatures)
     fit = fit_thermal(points, order=args.order, reference_c=args.reference_c)
     model = fit.model

@@ -103,7 +103,16 @@ def load_points(specs: list[str], temperatures: list[float] | None = None
         point, more = load_point(spec, None if temperatures is None else temperatures[k])
         points.append(point)
         notes += more
-    units = {read_provenance(p.label).unit_id for p in points} - {None}
+    origins = [read_provenance(p.label) for p in points]
+    seen: dict[str, str] = {}
+    for p, origin in zip(points, origins):
+        for key in (str(Path(p.label).resolve()), origin.recording_sha256):
+            if key and key in seen:
+                raise InputError(p.label, f"the same calibration as {seen[key]} (same table or recording): a thermal "
+                                 "fit needs independent calibrations")
+            if key:
+                seen[key] = p.label
+    units = {origin.unit_id for origin in origins} - {None}
     if len(units) > 1:
         raise InputError(None, f"the tables are of units {', '.join(sorted(units))}: a thermal model is of one unit")
     names = [n for n in points[0].params.names if all(n in p.params.names for p in points)]

@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputError, shown
-from ..core.files import atomic_write_text
 from ..core.inputs import check_input_file
 from ..core.units import TO_SI, dimension_of
 from ..model.registry import is_known, unit_of

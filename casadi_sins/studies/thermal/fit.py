@@ -177,8 +177,8 @@ def fit_thermal(points: list[Point], order: str = "auto", reference_c: float = 2
     orders = np.full(n, 2 if (order == "2" or (order == "auto" and distinct >= 3)) else 1)
     a2_z = np.full(n, np.nan)
     theta, cov, designs = _gls(ts, ys, weights, orders)
+    full_cov = cov
     if order == "auto" and distinct >= 3:
-        full_cov = cov
         a2_z = theta[2 * n:] / np.sqrt(np.clip(np.diag(cov)[2 * n:], 1e-300, None))
         while True:
             z = theta[2 * n:] / np.sqrt(np.clip(np.diag(cov)[2 * n:], 1e-300, None))
@@ -187,15 +187,17 @@ def fit_thermal(points: list[Point], order: str = "auto", reference_c: float = 2
                 break
             orders[drop] = 1
             theta, cov, designs = _gls(ts, ys, weights, orders)
-        cov = full_cov  # the curvature the data cannot exclude stays in the sigma
-    return _finish(points, temps, reference_c, theta, cov, designs, ys, covs, orders, a2_z, mean, size)
+    fitted = dict(theta=theta, cov=cov, designs=designs)
+    # the reported covariance: the all-quadratic fit's under auto (the curvature the data cannot exclude stays)
+    return _finish(points, temps, reference_c, fitted, full_cov, ys, covs, orders, a2_z, mean, size)
 
 
-def _finish(points, temps, reference_c, theta, cov, designs, ys, covs, orders, a2_z, mean, size) -> ThermalFit:
-    """Residuals, Birge widening, warnings, and the model back in SI per degC."""
+def _finish(points, temps, reference_c, fitted, cov, ys, covs, orders, a2_z, mean, size) -> ThermalFit:
+    """Residuals (of the fitted orders), Birge widening of ``cov``, warnings, and the model back in SI per degC."""
     n, m = len(orders), len(points)
+    theta, designs = fitted["theta"], fitted["designs"]
     residuals = np.array([y - x @ theta for y, x in zip(ys, designs)])
-    resid_var = np.array([np.diag(c - x @ cov @ x.T) for c, x in zip(covs, designs)])
+    resid_var = np.array([np.diag(c - x @ fitted["cov"] @ x.T) for c, x in zip(covs, designs)])
     standardized = residuals / np.sqrt(np.clip(resid_var, 1e-300, None))
     chi2 = np.sum(residuals ** 2 / np.array([np.diag(c) for c in covs]), axis=0)
     dof = m - orders - 1

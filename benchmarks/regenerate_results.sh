@@ -26,3 +26,4 @@ python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 #
 python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchmark.txt"   # issue 16's worlds, no datasheet
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
 python benchmarks/bench_mutations.py --out "$out"                                          # hostile input (issue 17)
+python benchmarks/bench_thermal.py --seeds 1 2 3 --out "$out" | tee "$out/thermal-benchmark.txt"   # thermal model, a setpoint left out (issue 30), ~6 min

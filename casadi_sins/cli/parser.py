@@ -6,10 +6,11 @@ import argparse
 
 from ..core.version import __version__
 from ..report.exports import EXPORTS
-from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
-                       cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
+from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_montecarlo,
+                       cmd_navigate, cmd_rough, cmd_segment, cmd_validate)
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
+from .thermal import add_thermal_command, cmd_export_any, cmd_simulate_any
 
 
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
@@ -20,7 +21,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     parser.add_argument("--version", action="version", version=f"casadi-sins {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth")
+    p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth (a thermal "
+                       "problem: one recording per temperature setpoint)")
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
     p.add_argument("--seed", type=int, default=0, help="random seed of deviations and noise (default 0)")
     p.add_argument("--out", required=True, help="output folder")
@@ -28,7 +30,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--no-noise", action="store_true", help="leave out the sensor noise")
     p.add_argument("--quantize", action="store_true", help="integer pulses, remainder carried")
     p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg")
-    p.set_defaults(func=cmd_simulate)
+    p.set_defaults(func=cmd_simulate_any)  # a thermal problem ([thermal]): one recording per setpoint
 
     p = sub.add_parser("validate", help="read and check a recording; print its summary")
     p.add_argument("recording", help="recording description NAME.toml")
@@ -80,12 +82,12 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
 
     p = sub.add_parser("export", help="a parameter table as compensation matrices (JSON, YAML, C header) or PSINS "
                        "clbt text, with the provenance from the table's companion report")
-    p.add_argument("table", help="parameter table CSV")
+    p.add_argument("table", help="parameter table CSV (or a thermal model thermal.csv: --format c only)")
     p.add_argument("--format", required=True, choices=list(EXPORTS), help="json or yaml: compensation matrices; "
                    "psins: the PSINS clbt struct; c: a C header for firmware (float64 arrays, inline function)")
     p.add_argument("--out", required=True, help="file to write")
     p.add_argument("--unit-id", help="serial number of the unit")
-    p.set_defaults(func=cmd_export)
+    p.set_defaults(func=cmd_export_any)  # a thermal.csv exports as a C header with casadi_sins_compensate_t
 
     p = sub.add_parser("compare", help="run both solvers on a recording and compare them (CSV, Markdown, PNG)")
     p.add_argument("recording", help="recording description NAME.toml")
@@ -148,6 +150,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.set_defaults(func=cmd_demo)
     _add_modulation(sub)
     add_production_commands(sub)
+    add_thermal_command(sub)
     return parser
 
 

@@ -16,13 +16,14 @@ from ..data.tolerance import read_tolerance_sheet
 from ..report.provenance import read_provenance
 from ..report.rounding import format_sigma, format_with_sigma
 from ..report.tables import frame_files
-from ..studies.apply import apply_files, apply_table
+from ..studies.apply import apply_files
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
+from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
 
 
 def _number(x) -> str:
@@ -31,11 +32,11 @@ def _number(x) -> str:
 
 def cmd_apply(args) -> int:
     """``apply``: a recording compensated with a table, and its check against gravity and the Earth rate."""
-    params = read_table(args.table)
-    rec = refine(read_recording(args.recording))
-    applied = apply_table(rec, params)
-    origin = read_provenance(args.table)
-    write_files(apply_files(applied, args.out, str(args.table), origin.table_sha256))
+    table, recording = apply_inputs(args)
+    rec = refine(read_recording(recording))
+    applied = applied_recording(args, table, rec)
+    origin = read_provenance(table)
+    write_files(apply_files(applied, args.out, str(table), origin.table_sha256))
     if not applied.check.empty:
         print(applied.check.to_string(index=False, float_format=_number))
     for note in applied.notes:
@@ -152,8 +153,9 @@ def add_production_commands(sub) -> None:
     """Register ``apply``, ``history`` and ``batch`` on the command line's subparsers."""
     p = sub.add_parser("apply", help="compensate a recording with a table: the compensated recording (increments "
                        "in rad and m/s) and its check against gravity and the Earth rate at rest")
-    p.add_argument("table", help="parameter table CSV to apply")
-    p.add_argument("recording", help="recording description NAME.toml (raw pulses)")
+    p.add_argument("table", nargs="?", help="parameter table CSV to apply (not with --thermal)")
+    p.add_argument("recording", nargs="?", help="recording description NAME.toml (raw pulses)")
+    add_thermal_apply_options(p)
     p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
                    ".csv/.md")
     p.set_defaults(func=cmd_apply)

@@ -14,6 +14,10 @@
     [imu]
     rate_hz = 100.0
 
+    [conditions]                       # optional, every key optional (data.conditions)
+    temperature_c = 23.5
+    date = "2024-05-17"
+
     [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg)
     group = 1
     kind = "static"
@@ -28,11 +32,14 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..core import orientation as orient
 from ..core.earth import Site
 from ..core.errors import InputError, shown
 from ..core.files import write_files
 from ..core.toml import array_table_lines, read_toml_text
+from .conditions import TEMPERATURE_RANGE_C, parse_conditions
 from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
 from .samples import read_samples, samples_writer
 
@@ -68,16 +75,31 @@ def read_recording(path: str | Path) -> Recording:
     if not 1.0 <= rate_hz <= 1e5:
         raise InputError(path, f"[imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz:g}")
     segments = _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments"))
+    conditions, notes = parse_conditions(doc.get("conditions"), path)
     data_path = path.parent / data_name
-    time, pulses = read_samples(data_path, rate_hz)
+    time, pulses, temperature = read_samples(data_path, rate_hz, with_temperature=True)
+    _check_temperature(temperature, data_path)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time,
-                    gyro=pulses[:, :3], accel=pulses[:, 3:], source=path)
+                    gyro=pulses[:, :3], accel=pulses[:, 3:], source=path, warnings=notes,
+                    conditions=conditions, temperature=temperature)
     rate_warning = check_rate(time, rate_hz, data_path)
     if rate_warning:
         rec.warnings.append(rate_warning)
     validate_schedule(rec)
     check_physical_range(rec, data_path)
     return rec
+
+
+def _check_temperature(temperature, data_path) -> None:
+    """The CSV's temperature column within the range of a unit on a bench, else name the line."""
+    if temperature is None:
+        return
+    low, high = TEMPERATURE_RANGE_C
+    outside = (temperature < low) | (temperature > high)
+    if outside.any():
+        row = int(np.argmax(outside))
+        raise InputError(data_path, f"temperature {temperature[row]:g} is outside {low:g}..{high:g} degC "
+                         "(the column is degC)", line=row + 2, column="temperature")
 
 
 def _require(doc: dict, key: str, kind: type, path) -> object:
@@ -172,8 +194,11 @@ def description(rec: Recording, data_name: str) -> dict:
         item["start_s"] = seg.start
         item["end_s"] = seg.end
         segments.append(item)
-    return {"format": FORMAT, "name": rec.name, "data": data_name, "site": site,
-            "imu": {"rate_hz": rec.rate_hz}, "segments": segments}
+    doc = {"format": FORMAT, "name": rec.name, "data": data_name, "site": site,
+           "imu": {"rate_hz": rec.rate_hz}, "segments": segments}
+    if rec.conditions:
+        doc["conditions"] = rec.conditions.to_dict()
+    return doc
 
 
 def toml_value(value) -> str:
@@ -194,7 +219,9 @@ def description_toml(rec: Recording, data_name: str) -> str:
     doc = description(rec, data_name)
     lines = [f"# {FORMAT} recording written by casadi-sins"]
     lines += [f"{key} = {toml_value(doc[key])}" for key in ("format", "name", "data")]
-    for table in ("site", "imu"):
+    for table in ("site", "imu", "conditions"):
+        if table not in doc:
+            continue
         lines += ["", f"[{table}]"] + [f"{k} = {toml_value(v)}" for k, v in doc[table].items()]
     for item in doc["segments"]:
         lines += ["", "[[segments]]"] + [f"{k} = {toml_value(v)}" for k, v in item.items()]

@@ -18,6 +18,7 @@ from ..core import orientation as orient
 from ..core.earth import EARTH_RATE, G0, Site
 from ..core.errors import InputError
 from ..core.files import safe_stem
+from .conditions import Conditions
 
 FORMAT = "sins-recording/1"
 PULSE_COLUMNS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
@@ -71,6 +72,10 @@ class Recording:
         End of each sample interval, s.
     gyro, accel : ndarray (N, 3)
         Raw pulse increments per interval.
+    conditions : Conditions
+        The description's ``[conditions]`` (empty when not given).
+    temperature : ndarray (N,) or None
+        The CSV's optional ``temperature`` column, degC.
     """
 
     name: str
@@ -82,6 +87,8 @@ class Recording:
     accel: np.ndarray
     source: Path | None = None  # the description file, when read from one
     warnings: list[str] = dataclasses.field(default_factory=list)  # doubts about the data, for the reports
+    conditions: Conditions = dataclasses.field(default_factory=Conditions)
+    temperature: np.ndarray | None = None  # degC per sample, when the CSV has the column
 
     @property
     def dt(self) -> float:

@@ -1,5 +1,7 @@
 """The CSV of raw pulse increments: ``time, gyro_x..z, accel_x..z`` (extra columns are ignored).
 
+An optional ``temperature`` column (degC per sample) is read when asked for.
+
 ``time`` is the end of each sample interval, strictly increasing at the uniform rate ``rate_hz``;
 pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files are read as such.
 """
@@ -20,14 +22,19 @@ from ..core.errors import InputError, shown
 from ..core.inputs import check_input_file, check_memory_for, decompression_errors, first_line, open_binary
 from .recording import COLUMNS, PULSE_COLUMNS, TIME_TOLERANCE
 
+#: The optional column of the unit's temperature, degC.
+TEMPERATURE_COLUMN = "temperature"
+
 
 #: More columns than this is not a CSV of samples (the format has 7; extra columns are allowed).
 MAX_COLUMNS = 1000
 _FIELDS = re.compile(r"Expected (\d+) fields in line (\d+), saw (\d+)")
 
 
-def read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False) -> tuple:
     """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
+
+    With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one.
 
     Every row must have exactly the header's number of fields (a comma inside a number would shift the
     columns); the columns are found by name, extra ones are ignored.  Floats are parsed directly (8 bytes
@@ -43,7 +50,8 @@ def read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarra
     check_memory_for(data_path, size)
     try:
         columns = _header(data_path)
-        values = _parse(data_path, columns)
+        wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
+        values = _parse(data_path, columns, wanted)
     except InputError:
         raise
     except MemoryError:
@@ -55,7 +63,10 @@ def read_samples(data_path: Path, rate_hz: float) -> tuple[np.ndarray, np.ndarra
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
-    return _check_time(data_path, values, rate_hz)
+    time, pulses = _check_time(data_path, values[:, :len(COLUMNS)], rate_hz)
+    if not with_temperature:
+        return time, pulses
+    return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
 
 
 def _header(data_path: Path) -> list[str]:
@@ -75,10 +86,10 @@ def _header(data_path: Path) -> list[str]:
     return columns
 
 
-def _parse(data_path: Path, columns: list[str]) -> np.ndarray:
-    """All rows as floats, the format's columns in order; every row with exactly the header's fields."""
+def _parse(data_path: Path, columns: list[str], wanted=COLUMNS) -> np.ndarray:
+    """All rows as floats, the ``wanted`` columns in order; every row with exactly the header's fields."""
     width = len(columns)
-    take = [columns.index(c) for c in COLUMNS]
+    take = [columns.index(c) for c in wanted]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)  # never drop fields silently
@@ -89,18 +100,18 @@ def _parse(data_path: Path, columns: list[str]) -> np.ndarray:
         if found:
             raise InputError(data_path, f"{found.group(3)} fields, the header has {found.group(1)}",
                              line=int(found.group(2))) from None
-        return _read_rows(data_path, columns)
+        return _read_rows(data_path, columns, wanted)
     except (ValueError, TypeError, pd.errors.ParserWarning):
-        return _read_rows(data_path, columns)  # names the text at fault
+        return _read_rows(data_path, columns, wanted)  # names the text at fault
     values = frame.to_numpy(dtype=float)[:, take]
     if len(frame) and (not np.all(np.isfinite(values)) or frame.isna().to_numpy().any()):
-        return _read_rows(data_path, columns)
+        return _read_rows(data_path, columns, wanted)
     return values
 
 
-def _read_rows(data_path: Path, columns: list[str]) -> np.ndarray:
+def _read_rows(data_path: Path, columns: list[str], wanted=COLUMNS) -> np.ndarray:
     """Read row by row (only after the fast parse failed) to name the first line at fault."""
-    take = [columns.index(c) for c in COLUMNS]
+    take = [columns.index(c) for c in wanted]
     rows = []
     with io.TextIOWrapper(open_binary(data_path), encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle, skipinitialspace=True)
@@ -110,7 +121,7 @@ def _read_rows(data_path: Path, columns: list[str]) -> np.ndarray:
                 rows.append(_row_values(data_path, columns, take, row, reader.line_num))
         except csv.Error as exc:  # an unmatched quote runs a field over many lines
             raise InputError(data_path, f"not a CSV row ({exc})", line=reader.line_num) from None
-    return np.array([r for r in rows if r is not None], dtype=float).reshape(-1, len(COLUMNS))
+    return np.array([r for r in rows if r is not None], dtype=float).reshape(-1, len(wanted))
 
 
 def _row_values(data_path: Path, columns: list[str], take: list[int], row: list[str], line: int):
@@ -167,14 +178,17 @@ CSV_CHUNK = 500_000
 
 
 def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: slice | None = None,
-                header: bool = True) -> str:
-    """CSV text of samples; floats in shortest round-trip form, integral pulses as integers."""
+                header: bool = True, temperature: np.ndarray | None = None) -> str:
+    """CSV text of samples; floats in shortest round-trip form, integral pulses as integers; the
+    ``temperature`` column last when given."""
     rows = rows or slice(None)
     frame = pd.DataFrame({"time": np.round(time[rows], 9)})
     for j, col in enumerate(PULSE_COLUMNS):
         whole = gyro[:, j] if j < 3 else accel[:, j - 3]
         integral = np.all(whole == np.round(whole)) and np.abs(whole).max(initial=0) < 2**53
         frame[col] = whole[rows].astype(np.int64) if integral else whole[rows]
+    if temperature is not None:
+        frame[TEMPERATURE_COLUMN] = temperature[rows]
     return frame.to_csv(index=False, header=header, lineterminator="\n")
 
 
@@ -185,6 +199,6 @@ def samples_writer(rec):
     def write(handle) -> None:
         for first in range(0, len(rec.time), CSV_CHUNK):
             handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                     header=first == 0).encode("utf-8"))
+                                     header=first == 0, temperature=rec.temperature).encode("utf-8"))
 
     return write

@@ -25,6 +25,7 @@ from ..core.version import __version__, software_versions
 from ..calibrate.result import CalibrationResult
 from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS
 from ..core.units import DEG_PER_H, UG
+from ..data.conditions import conditions_dict
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet, natural_errors
@@ -125,11 +126,12 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "versions": software_versions(),
         "command": command,
-        "unit_id": unit_id,
+        "unit_id": unit_id or rec.conditions.unit_id,  # --unit-id, else the recording's
         "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
                       "sha256": recording_hash(rec), "samples": int(len(rec.time)), "rate_hz": rec.rate_hz,
                       "groups": len(rec.group_ids), "segments": len(rec.segments),
                       "latitude_deg": math.degrees(rec.site.latitude), "gravity_mps2": rec.site.g},
+        "conditions": conditions_dict(rec),
         "solver": result.solver,
         "converged": bool(result.success),
         "iterations": int(result.nit),
@@ -177,6 +179,7 @@ def report_markdown(data: dict) -> str:
              f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
     if data.get("command"):
         lines.append(f"- command: {markdown_text(data['command'])}")
+    lines += _conditions_lines(data.get("conditions"))
     status = "converged" if data["converged"] else "NOT converged"
     if "ipopt" in data:
         ip = data["ipopt"]
@@ -227,6 +230,24 @@ def report_markdown(data: dict) -> str:
     if moving:
         lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
     return "\n".join(lines) + "\n"
+
+
+def _conditions_lines(conditions: dict | None) -> list[str]:
+    """The recording conditions (Markdown lines, before the solver's)."""
+    lines = ["", "## Conditions", ""]
+    if not conditions:
+        return lines + ["- none given (add a [conditions] table to the description: temperature_c, date, operator, "
+                        "bench, unit_id)", ""]
+    words = {"temperature_c": "temperature", "date": "recorded", "operator": "operator", "bench": "bench",
+             "unit_id": "unit id (description)"}
+    for key, word in words.items():
+        if key in conditions:
+            value = conditions[key]
+            text = f"{value:.3g} degC" if key == "temperature_c" else markdown_text(str(value))
+            if key == "temperature_c" and conditions.get("temperature_source"):
+                text += f" ({conditions['temperature_source']})"
+            lines.append(f"- {word}: {text}")
+    return lines + [""]
 
 
 def _wander_sentence(sensor: str, v: dict) -> str:

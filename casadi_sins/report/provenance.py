@@ -19,6 +19,7 @@ from pathlib import Path
 from ..core.errors import InputError
 from ..core.inputs import check_input_file
 from ..core.text import one_line
+from ..data.conditions import parse_date
 from .calibration import companion_paths
 
 #: A table or a report larger than this is not one (they are kilobytes).
@@ -42,6 +43,9 @@ class Provenance:
         From the companion report.
     versions : dict
         Versions of the software that calibrated (empty for reports that predate them).
+    conditions : dict
+        The recording conditions of the report (``temperature_c``, ``date``, ``operator``, ``bench``,
+        ``unit_id``; empty when none were given or the report predates them).
     from_report : bool
         Whether a companion report was found.
     """
@@ -56,6 +60,16 @@ class Provenance:
     software: str | None = None
     versions: dict = dataclasses.field(default_factory=dict)
     from_report: bool = False
+    conditions: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def recorded(self) -> datetime.datetime | None:
+        """When the recording was made (its conditions' date), or None."""
+        date = self.conditions.get("date")
+        try:
+            return None if date is None else parse_date(date)
+        except ValueError:
+            return None
 
     def metadata(self) -> dict:
         """The provenance as the metadata block of an export (no empty entries)."""
@@ -64,6 +78,9 @@ class Provenance:
                "recording": self.recording, "recording_sha256": self.recording_sha256, "solver": self.solver,
                "calibrated_with": self.software,
                "versions": ", ".join(f"{k} {v}" for k, v in self.versions.items()) or None}
+        for key, value in self.conditions.items():
+            if key != "temperature_source":
+                out[f"recording_{key}" if key in ("date", "unit_id") else key] = value
         if not self.from_report:
             out["provenance"] = "no companion report beside the table: unit, date and recording unknown"
         return {k: v for k, v in out.items() if v is not None}
@@ -115,9 +132,17 @@ def read_provenance(table_path: str | Path) -> Provenance:
         date = date.replace(tzinfo=datetime.timezone.utc)
     rec = data.get("recording") if isinstance(data.get("recording"), dict) else {}
     versions = data.get("versions") if isinstance(data.get("versions"), dict) else {}
-    return Provenance(table, table_hash, date, _text(data.get("unit_id")), _text(rec.get("name")),
-                      _text(rec.get("sha256")), _text(data.get("solver")), _text(data.get("software")),
-                      {str(k): str(v) for k, v in versions.items()}, from_report=True)
+    return Provenance(table, table_hash, date, _text(data.get("unit_id")) or _text(_conditions(data).get("unit_id")),
+                      _text(rec.get("name")), _text(rec.get("sha256")), _text(data.get("solver")),
+                      _text(data.get("software")), {str(k): str(v) for k, v in versions.items()}, from_report=True,
+                      conditions=_conditions(data))
+
+
+def _conditions(data: dict) -> dict:
+    """The report's conditions: numbers as numbers, anything else as one line of text."""
+    raw = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
+    return {str(k): (v if isinstance(v, (int, float)) and not isinstance(v, bool) else one_line(v))
+            for k, v in raw.items() if v is not None}
 
 
 def _text(value) -> str | None:

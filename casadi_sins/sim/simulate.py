@@ -175,11 +175,15 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     return Simulation(recording, problem.truth, starts, statics, factors, seed, sway)
 
 
+def simulation_files(sim: Simulation, out_dir: str | Path) -> dict:
+    """``{path: content}`` of ``NAME.toml``, ``NAME.csv`` and ``NAME.truth.csv`` in ``out_dir``."""
+    out_dir = Path(out_dir)
+    files = recording_files(sim.recording, out_dir / f"{sim.recording.file_stem}.toml")
+    files[out_dir / f"{sim.recording.file_stem}.truth.csv"] = table_text(sim.truth, as_truth=True).encode()
+    return files
+
+
 def write_simulation(sim: Simulation, out_dir: str | Path) -> Path:
     """Write ``NAME.toml``, ``NAME.csv`` and ``NAME.truth.csv`` into ``out_dir`` together; returns the TOML path."""
-    out_dir = Path(out_dir)
-    toml_path = out_dir / f"{sim.recording.file_stem}.toml"
-    files = recording_files(sim.recording, toml_path)
-    files[out_dir / f"{sim.recording.file_stem}.truth.csv"] = table_text(sim.truth, as_truth=True).encode()
-    write_files(files)
-    return toml_path
+    write_files(simulation_files(sim, out_dir))
+    return Path(out_dir) / f"{sim.recording.file_stem}.toml"

@@ -83,9 +83,14 @@ def finished(rec_path, out_dir) -> dict | None:
 def row_from_report(data: dict, rec_path, status: str) -> dict:
     """The fleet-table row of a unit from its report data."""
     warnings = list(data.get("warnings") or [])
-    row = {"unit_id": data.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
+    conditions = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
+    row = {"unit_id": data.get("unit_id") or conditions.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
            "status": status if not warnings or status != "ok" else "warnings", "warnings": len(warnings),
            "message": " | ".join(warnings), "wall_time_s": data.get("wall_time_s", math.nan)}
+    for key, column in (("date", "recorded"), ("temperature_c", "temperature_c"), ("operator", "operator"),
+                        ("bench", "bench")):
+        if conditions.get(key) is not None:
+            row[column] = conditions[key]
     for p in data.get("parameters") or []:
         row[p["parameter"]] = p["value"]
         row[f"{p['parameter']}_sigma"] = math.nan if p.get("sigma") is None else p["sigma"]
@@ -100,7 +105,7 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         result = calibrate(rec, solver=options.solver, noise=noise, model=options.model)
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters).encode()}
-        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.name))
+        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name))
         data = json.loads(files[companion_paths(table)[0]])
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
@@ -200,7 +205,8 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
     out = Path(out_dir)
     failed = int((fleet["status"] == "failed").sum())
     files = frame_files(fleet, out / "fleet", f"{len(fleet)} units, {failed} failed")
-    summary = fleet[[c for c in ("unit_id", "status", "warnings", "outliers", "message", "resumed") if c in fleet]]
+    summary = fleet[[c for c in ("unit_id", "status", "warnings", "outliers", "recorded", "temperature_c", "message",
+                                     "resumed") if c in fleet]]
     files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {len(fleet)} units, {failed} failed; "
                                           "values and sigma of every parameter in fleet.csv")[out / "fleet.md"]
     files.update(frame_files(spread, out / "fleet-spread", "spread of each parameter across the units (natural "

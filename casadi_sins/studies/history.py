@@ -1,7 +1,8 @@
 """One unit followed across its calibrations: repeatability, drift, pass/fail against a tolerance sheet.
 
-The tables are ordered by the date of their calibration (from each table's companion report,
-:mod:`report.provenance`; a table without one falls back to its file date, with a note).  For every
+The tables are ordered by the date of their recording (``[conditions] date`` of the recording, carried
+in each table's companion report, :mod:`report.provenance`); without one, by the date of the
+calibration (the report's), and a table without a report falls back to its file date, with a note.  For every
 parameter and every pair of consecutive calibrations::
 
     change = value_2 - value_1              (scale factors: value_2 / value_1 - 1, ppm)
@@ -9,7 +10,9 @@ parameter and every pair of consecutive calibrations::
 
 in natural units: a change with ``|z|`` above the limit (4 unless the tolerance sheet says
 otherwise) is beyond what the two calibrations' noise explains, and is flagged.  The drift rate
-per year is the sigma-weighted straight line through all the calibrations (relative to the first).
+per year is the sigma-weighted straight line through all the calibrations (relative to the first),
+only where the dates span at least :data:`MIN_DRIFT_SPAN_DAYS` (closer calibrations show repeatability,
+and a straight line through them extrapolated to a year is noise times hundreds): else n/a, with a note.
 With a tolerance sheet (:mod:`data.tolerance`) each parameter passes or fails: every change within
 its ``change`` limit and the drift within its ``drift_per_year`` limit.
 """
@@ -34,6 +37,8 @@ from ..report.rounding import rounded
 from ..report.tables import frame_files
 
 YEAR_S = 365.25 * 86400.0
+#: The shortest span of dates over which a drift per year is computed (shorter: n/a, with a note).
+MIN_DRIFT_SPAN_DAYS = 1.0
 
 
 @dataclasses.dataclass
@@ -44,9 +49,21 @@ class Calibration:
     params: ParameterSet
 
     @property
+    def date(self):
+        """When the recording was made (its conditions' date), else when it was calibrated."""
+        return self.provenance.recorded or self.provenance.date
+
+    @property
+    def date_from(self) -> str:
+        """Where :attr:`date` comes from."""
+        if self.provenance.recorded is not None:
+            return "recording"
+        return "calibration report" if self.provenance.from_report else "file date"
+
+    @property
     def label(self) -> str:
-        """The date of the calibration, for tables and plots."""
-        return self.provenance.date.strftime("%Y-%m-%d %H:%M")
+        """The date, for tables and plots."""
+        return self.date.strftime("%Y-%m-%d %H:%M")
 
 
 def load_history(paths) -> tuple[list[Calibration], list[str]]:
@@ -78,8 +95,22 @@ def load_history(paths) -> tuple[list[Calibration], list[str]]:
                          "are not independent calibrations")
         elif digest:
             seen[digest] = c.provenance.table
-    cals.sort(key=lambda c: c.provenance.date)
+    cals.sort(key=lambda c: c.date)
+    undated = [c for c in cals if c.date_from != "recording"]
+    if undated and len(undated) < len(cals):
+        notes.append(f"{len(undated)} of {len(cals)} recordings carry no [conditions] date: those are dated by "
+                     "their calibration")
+    elif undated:
+        notes.append("no recording carries a [conditions] date: the calibrations are dated by when they were run")
+    if drift_span_days(cals) < MIN_DRIFT_SPAN_DAYS:
+        notes.append(f"the dates span {drift_span_days(cals) * 86400.0:.3g} s, under {MIN_DRIFT_SPAN_DAYS:g} day: "
+                     "no drift per year is given (n/a); the changes show repeatability")
     return cals, notes
+
+
+def drift_span_days(cals: list[Calibration]) -> float:
+    """The span of the calibrations' dates, days."""
+    return (max(c.date for c in cals) - min(c.date for c in cals)).total_seconds() / 86400.0
 
 
 def common_names(cals: list[Calibration]) -> tuple[str, ...]:
@@ -102,7 +133,7 @@ def changes_frame(cals: list[Calibration], sheet: ToleranceSheet | None = None) 
         a, b = _subset(before.params, names), _subset(after.params, names)
         change = natural_errors(b, a)
         combined = np.hypot(a.natural_sigma(), b.natural_sigma())
-        years = (after.provenance.date - before.provenance.date).total_seconds() / YEAR_S
+        years = (after.date - before.date).total_seconds() / YEAR_S
         for i, name in enumerate(names):
             limit = sheet.limit("change", name) if sheet else math.nan
             rows.append({"parameter": name, "unit": natural_unit_of(name), "from": before.label, "to": after.label,
@@ -119,9 +150,9 @@ def drift_rates(cals: list[Calibration]) -> tuple[np.ndarray, np.ndarray, np.nda
     first = _subset(cals[0].params, names)
     offsets = np.array([natural_errors(_subset(c.params, names), first) for c in cals])
     sigma = np.array([_subset(c.params, names).natural_sigma() for c in cals])
-    years = np.array([(c.provenance.date - cals[0].provenance.date).total_seconds() / YEAR_S for c in cals])
+    years = np.array([(c.date - cals[0].date).total_seconds() / YEAR_S for c in cals])
     rate, rate_sigma = np.full(len(names), np.nan), np.full(len(names), np.nan)
-    if np.ptp(years) <= 0:
+    if np.ptp(years) <= 0 or drift_span_days(cals) < MIN_DRIFT_SPAN_DAYS:
         return rate, rate_sigma, offsets
     for j in range(len(names)):
         w = 1.0 / sigma[:, j] ** 2 if np.all(sigma[:, j] > 0) else np.ones(len(cals))
@@ -160,11 +191,14 @@ def summary_frame(cals: list[Calibration], changes: pd.DataFrame, sheet: Toleran
 
 
 def calibrations_frame(cals: list[Calibration]) -> pd.DataFrame:
-    """The calibrations in date order with their provenance."""
-    return pd.DataFrame([{"date": c.provenance.date.isoformat(timespec="seconds"), "table": str(c.provenance.table),
+    """The calibrations in date order with their provenance and recording conditions."""
+    return pd.DataFrame([{"date": c.date.isoformat(timespec="seconds"), "table": str(c.provenance.table),
                           "unit_id": c.provenance.unit_id or "", "recording": c.provenance.recording or "",
                           "recording_sha256": c.provenance.recording_sha256 or "", "solver": c.provenance.solver or "",
-                          "date_from": "report" if c.provenance.from_report else "file date"} for c in cals])
+                          "date_from": c.date_from,
+                          "calibrated": c.provenance.date.isoformat(timespec="seconds"),
+                          **{k: c.provenance.conditions.get(k, "") for k in ("temperature_c", "operator", "bench")}}
+                         for c in cals])
 
 
 def plot_group(cals: list[Calibration], group_key: str) -> bytes:
@@ -173,7 +207,7 @@ def plot_group(cals: list[Calibration], group_key: str) -> bytes:
     group = GROUPS[group_key]
     members = [n for n in group.names if n in names]
     _, _, offsets = drift_rates(cals)
-    dates = [c.provenance.date for c in cals]
+    dates = [c.date for c in cals]
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for n in members:

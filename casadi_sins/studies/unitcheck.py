@@ -50,7 +50,8 @@ def static_part(rec: Recording, seg: Segment, seconds: float | None = None) -> R
     first = float(rec.time[sl.start] - rec.dt)
     part = Segment(1, 1, "static", first, float(rec.time[sl.stop - 1]), orientation=seg.orientation)
     return dataclasses.replace(rec, segments=[part], time=rec.time[sl], gyro=rec.gyro[sl], accel=rec.accel[sl],
-                               source=None, warnings=[])
+                               source=None, warnings=[],
+                               temperature=None if rec.temperature is None else rec.temperature[sl])
 
 
 def recording_navigation_check(rec: Recording, tables: dict[str, np.ndarray], align_s: float = 300.0,

@@ -1,0 +1,168 @@
+"""The ``thermal`` command: one unit's calibrations at several temperatures into a temperature model.
+Parsing and printing only; the work is in :mod:`studies.thermal`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from ..core.errors import InputError
+from ..core.files import atomic_write_text, write_files
+from ..core.inputs import first_line
+from ..data.conditions import TEMPERATURE_RANGE_C
+from ..data.tables import read_table
+from ..data.thermal import companion_path, read_thermal
+from ..data.thermal_problem import has_thermal, load_thermal_problem
+from ..model.registry import natural_unit_of
+from ..report.cheader_thermal import c_header_thermal
+from ..report.rounding import format_sigma, format_with_sigma
+from ..studies.apply import Applied, apply_table
+from ..studies.thermal.apply import apply_thermal
+from ..studies.thermal.fit import fit_thermal
+from ..studies.thermal.inputs import load_points
+from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
+from ..studies.thermal.simulate import simulate_thermal, thermal_simulation_files
+from .commands import CliError, cmd_export, cmd_simulate
+
+
+def add_thermal_command(sub) -> None:
+    """The ``thermal`` sub-command and its options."""
+    p = sub.add_parser("thermal", help="a temperature model per parameter from one unit's calibrations at several "
+                       "temperatures: thermal.csv, thermal.md, plots, and tables at chosen temperatures")
+    p.add_argument("tables", nargs="+", metavar="TABLE.csv[@T]",
+                   help="parameter tables of one unit (their NAME.report.json gives the full covariance and the "
+                   "temperature, conditions.temperature_c); NAME.csv@25 gives the temperature (degC) explicitly")
+    p.add_argument("--temperatures", type=float, nargs="+", metavar="T",
+                   help="temperature of each table, degC, in the order of the tables (instead of the reports')")
+    p.add_argument("--order", choices=("auto", "1", "2"), default="auto",
+                   help="polynomial order per parameter: auto (by evidence, default), 1 or 2 for all")
+    p.add_argument("--reference-c", type=float, default=25.0, help="reference temperature T_ref, degC (default 25)")
+    p.add_argument("--at", type=float, nargs="+", default=[], metavar="T",
+                   help="write the parameter table at each temperature T (degC): DIR/at-<T>C.csv")
+    p.add_argument("--no-plots", action="store_true", help="leave out the plots")
+    p.add_argument("--out", required=True, help="output folder")
+    p.set_defaults(func=cmd_thermal)
+
+
+def cmd_thermal(args: argparse.Namespace) -> int:
+    """``thermal``: fit, write every file together, print the coefficients and the warnings."""
+    low, high = TEMPERATURE_RANGE_C
+    for t in [args.reference_c, *args.at]:
+        if not low <= t <= high:
+            raise CliError(f"temperature {t:g} degC (--reference-c or --at) is outside {low:g}..{high:g} degC")
+    points, notes, unit_id = load_points(args.tables, args.temperatures)
+    fit = fit_thermal(points, order=args.order, reference_c=args.reference_c)
+    model = fit.model
+    extrapolated = [t for t in args.at if model.extrapolates(t)]
+    if extrapolated:
+        fit.warnings.append(f"--at {', '.join(f'{t:g}' for t in extrapolated)} degC: extrapolated beyond the "
+                            f"calibrated range {model.range_c[0]:g} .. {model.range_c[1]:g} degC")
+    write_files(thermal_files(fit, args.out, list(args.at), notes, unit_id, plots=not args.no_plots))
+    coef, sig = natural_coefficients(model)
+    print(f"{len(points)} calibrations, {', '.join(f'{p.temperature_c:g}' for p in points)} degC; "
+          f"T_ref {model.reference_c:g} degC")
+    print(f"{'parameter':22s} {'unit':8s} {'a1 per degC':>18s} {'a2 per degC^2':>22s} order")
+    for i, name in enumerate(model.names):
+        unit = natural_unit_of(name)
+        print(f"{name:22s} {unit:8s} {format_with_sigma(coef[i, 1], sig[i, 1], signed=True):>10s} "
+              f"+- {format_sigma(sig[i, 1]):7s} {format_with_sigma(coef[i, 2], sig[i, 2], signed=True):>12s} "
+              f"+- {format_sigma(sig[i, 2]):7s} {model.orders[i]}")
+    for text in fit.warnings:
+        print(f"warning: {text}")
+    for text in notes:
+        print(f"note: {text}")
+    written = ["thermal.csv", "thermal.json", "thermal.md"] + [at_name(t) for t in args.at]
+    print(f"wrote {args.out}/{{{','.join(written)}}}" + ("" if args.no_plots else " and plots"))
+    return 0
+
+
+def add_thermal_apply_options(p) -> None:
+    """``apply --thermal thermal.csv [--temperature-c T]``: the table of a thermal model at the recording's temperature."""
+    p.add_argument("--thermal", metavar="thermal.csv", help="a thermal model (from thermal) instead of a table: "
+                   "the table at --temperature-c, else at the recording's temperature (its [conditions] "
+                   "temperature_c, or the mean of its temperature column over the rests)")
+    p.add_argument("--temperature-c", type=float, help="temperature of the unit, degC (with --thermal)")
+
+
+def apply_inputs(args) -> tuple[str, str]:
+    """``(table or thermal model, recording)`` of ``apply``: with ``--thermal`` the one positional is the recording."""
+    given = [a for a in (args.table, args.recording) if a is not None]
+    if args.thermal:
+        if len(given) != 1:
+            raise CliError("with --thermal give the recording alone (the thermal model replaces the table)")
+        return args.thermal, given[0]
+    if args.temperature_c is not None:
+        raise CliError("--temperature-c goes with --thermal (a table is of one temperature)")
+    if len(given) != 2:
+        raise CliError("apply needs a parameter table and a recording (or --thermal thermal.csv and a recording)")
+    return args.table, args.recording
+
+
+def applied_recording(args, table: str, rec) -> Applied:
+    """The recording compensated with the table, or with the thermal model at ``--temperature-c``, else at the
+    recording's ``[conditions] temperature_c``, else sample by sample at its temperature column."""
+    if not args.thermal:
+        return apply_table(rec, read_table(table))
+    model = read_thermal(table)
+    temperature, source = args.temperature_c, "--temperature-c"
+    if temperature is None and rec.conditions.temperature_c is not None:
+        temperature, source = rec.conditions.temperature_c, "the recording's [conditions]"
+    if temperature is None and rec.temperature is None:
+        raise CliError(f"{rec.label}: no temperature ([conditions] temperature_c or a temperature column): give "
+                       "--temperature-c")
+    applied = apply_thermal(rec, model, temperature)
+    if temperature is not None:
+        applied.notes.insert(0, f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})")
+    return applied
+
+
+def cmd_export_any(args) -> int:
+    """``export``: a parameter table (:func:`commands.cmd_export`), or a thermal model as a C header."""
+    if not is_thermal_file(args.table):
+        return cmd_export(args)
+    if args.format != "c":
+        raise CliError(f"{args.table}: a thermal model exports as --format c (casadi_sins_compensate_t); for the "
+                       f"{args.format} form of one temperature use thermal --at T and export that table")
+    model = read_thermal(args.table)
+    metadata = {"unit_id": args.unit_id or _thermal_unit_id(args.table), "thermal_model": str(args.table)}
+    try:
+        text = c_header_thermal(model, metadata)
+    except ValueError as exc:
+        raise CliError(f"{args.table}: {exc}") from None
+    atomic_write_text(args.out, text)
+    print(f"wrote {args.out} (c, thermal: casadi_sins_compensate_t)")
+    return 0
+
+
+def is_thermal_file(path) -> bool:
+    """Whether a CSV is a thermal model (its header has ``p_ref``), not a parameter table."""
+    try:
+        return "p_ref" in first_line(path).split(",")
+    except (OSError, InputError):
+        return False  # read_table names the problem
+
+
+def _thermal_unit_id(path) -> str | None:
+    try:
+        doc = json.loads(companion_path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    unit = doc.get("unit_id") if isinstance(doc, dict) else None
+    return unit if isinstance(unit, str) else None
+
+
+def cmd_simulate_any(args) -> int:
+    """``simulate``: a problem (:func:`commands.cmd_simulate`), or a thermal problem: one recording per setpoint."""
+    if not has_thermal(args.problem):
+        return cmd_simulate(args)
+    if args.start_attitude_deg is not None or args.quantize or args.name:
+        raise CliError("--start-attitude-deg, --quantize and --name are for a single recording; set them in the "
+                       "thermal problem's [errors] and name")
+    tp = load_thermal_problem(args.problem)
+    sims = simulate_thermal(tp, seed=args.seed, noise=not args.no_noise)
+    write_files(thermal_simulation_files(tp, sims, args.out))
+    for sim in sims:
+        print(f"wrote {args.out}/{sim.recording.file_stem}.toml (+ .csv, .truth.csv): "
+              f"{sim.recording.conditions.temperature_c:g} degC")
+    print(f"wrote {args.out}/thermal-truth.csv (the unit's true temperature model)")
+    return 0

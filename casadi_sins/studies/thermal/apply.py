@@ -1,0 +1,58 @@
+"""A recording compensated with a thermal model: at one temperature, or sample by sample at its own.
+
+With the recording's ``temperature`` column each sample is compensated with the parameters at its
+temperature (rounded to :data:`RESOLUTION_C`: with coefficients of a few ug or ppm per degC the
+rounding moves a parameter by a few thousandths of its unit, far below any sigma), as the unit's
+firmware does with ``casadi_sins_compensate_t``.  The check at rest is that of :mod:`studies.apply`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ...data.recording import Recording
+from ...model.output import compensate
+from ...model.registry import N_PARAMS
+from ...model.thermal import ThermalModel
+from ..apply import Applied, apply_table, static_check
+
+#: Samples whose temperatures agree to this are compensated with one table, degC.
+RESOLUTION_C = 0.01
+
+
+def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | None = None) -> Applied:
+    """Compensate ``rec`` with ``model`` at ``temperature_c``, or per sample at its ``temperature`` column.
+
+    Raises
+    ------
+    ValueError
+        Without a temperature and without a temperature column.
+    """
+    if temperature_c is not None:
+        applied = apply_table(rec, model.at(temperature_c))
+        applied.notes.extend(_range_notes(model, np.array([temperature_c])))
+        return applied
+    if rec.temperature is None:
+        raise ValueError("no temperature given and no temperature column")
+    temps = np.round(np.asarray(rec.temperature, float) / RESOLUTION_C) * RESOLUTION_C
+    dtheta, dv = np.empty_like(rec.gyro, dtype=float), np.empty_like(rec.accel, dtype=float)
+    for t in np.unique(temps):
+        rows = temps == t
+        dtheta[rows], dv[rows] = compensate(rec.gyro[rows], rec.accel[rows], model.values_at(t)[:N_PARAMS], rec.dt)
+    compensated = dataclasses.replace(rec, name=f"{rec.name}-compensated", gyro=dtheta, accel=dv, source=None,
+                                      temperature=None, warnings=list(rec.warnings))
+    notes = [f"compensated sample by sample at the recording's temperature column ({temps.min():.4g} .. "
+             f"{temps.max():.4g} degC)"] + _range_notes(model, temps)
+    if len(model.names) > N_PARAMS:
+        notes.append("the model's extra terms are not applied: only the 21 parameters of eq. 1 compensate sample by "
+                     "sample")
+    return Applied(compensated, static_check(compensated), notes)
+
+
+def _range_notes(model: ThermalModel, temps: np.ndarray) -> list[str]:
+    low, high = model.range_c
+    if temps.min() < low or temps.max() > high:
+        return [f"temperatures beyond the calibrated range {low:g} .. {high:g} degC: the model is extrapolated"]
+    return []

@@ -1,0 +1,131 @@
+"""The calibrations of a thermal fit: each table, its full covariance and its temperature.
+
+A table ``NAME.csv`` (``parameter,unit,value,sigma``, :func:`data.tables.read_table`) brings its full
+covariance in the companion report ``NAME.report.json`` that ``calibrate`` and ``batch`` write beside
+it (key ``"covariance"``, SI, table order); without one the sigma column alone weighs it (said in a
+note).  Its temperature, first found of:
+
+1. given on the command line, ``NAME.csv@25`` (degC) or one ``--temperatures`` entry per table;
+2. the report's ``"conditions": {"temperature_c": ...}``: the recording's ``[conditions]
+   temperature_c``, or the mean of its ``temperature`` column over the rests, as ``calibrate`` found it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...core.errors import InputError, shown
+from ...data.conditions import TEMPERATURE_RANGE_C
+from ...data.tables import read_table
+from ...model.parameters import ParameterSet
+from ...report.calibration import companion_paths
+from ...report.provenance import read_provenance
+from ..modulation.calibrated import check_psd, report_covariance
+from .fit import Point
+
+_AT = re.compile(r"^(?P<path>.+)@(?P<t>[-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?)$")
+
+
+def split_spec(spec: str) -> tuple[str, float | None]:
+    """``"NAME.csv@25"`` -> ``("NAME.csv", 25.0)``; a plain path -> ``(path, None)``."""
+    match = _AT.match(spec)
+    if match and not Path(spec).exists():
+        return match["path"], float(match["t"])
+    return spec, None
+
+
+def report_temperature(table: Path) -> float | None:
+    """The temperature (degC) in the conditions of the table's companion report, if it gives one."""
+    value = read_provenance(table).conditions.get("temperature_c")
+    if value is None:
+        return None
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(companion_paths(table)[0], f"conditions.temperature_c {shown(value)} is not a number")
+    return float(value)
+
+
+def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, list[str]]:
+    """One calibration: its table with covariance and its temperature; notes on what is missing.
+
+    Raises
+    ------
+    InputError
+        Naming the table without a temperature, without sigma, or with a covariance that is not its own.
+    """
+    path_text, given = split_spec(spec)
+    path = Path(path_text)
+    params = read_table(path)
+    notes = []
+    temperature = given if given is not None else temperature_c
+    if temperature is None:
+        temperature = report_temperature(path)
+    if temperature is None:
+        raise InputError(path, "no temperature: its report has no conditions.temperature_c; give it as "
+                         f"{path_text}@TEMP or with --temperatures")
+    low, high = TEMPERATURE_RANGE_C
+    if not low <= temperature <= high:
+        raise InputError(path, f"temperature {temperature:g} degC is outside {low:g}..{high:g} degC (a typo? Kelvin?)")
+    if params.sigma is None or np.any(~np.isfinite(params.sigma)):
+        raise InputError(path, "no sigma for every parameter: a thermal fit weighs each calibration by it")
+    cov, where = report_covariance(path, params.names)
+    if cov is not None:
+        check_psd(cov, where)
+        if not np.allclose(np.sqrt(np.diag(cov)), params.sigma, rtol=1e-3, atol=0.0):
+            raise InputError(where, f"its covariance's diagonal does not match the sigma of {path}")
+        params = ParameterSet(params.values, covariance=cov, names=params.names)
+    else:
+        notes.append(f"{path}: no covariance in a companion report; its sigma column alone weighs it "
+                     "(correlations between its parameters unknown)")
+    return Point(float(temperature), params, str(path)), notes
+
+
+def load_points(specs: list[str], temperatures: list[float] | None = None
+                ) -> tuple[list[Point], list[str], str | None]:
+    """Every calibration (:func:`load_point`), on the parameters they share, ordered by temperature;
+    notes; the unit id their reports name (None when none does).
+
+    Raises
+    ------
+    InputError
+        For fewer than two tables, a ``--temperatures`` list of another length, or tables without
+        common parameters.
+    """
+    if len(specs) < 2:
+        raise InputError(None, "thermal needs at least two parameter tables (one per temperature)")
+    if temperatures is not None and len(temperatures) != len(specs):
+        raise InputError(None, f"--temperatures has {len(temperatures)} entries for {len(specs)} tables")
+    points, notes = [], []
+    for k, spec in enumerate(specs):
+        point, more = load_point(spec, None if temperatures is None else temperatures[k])
+        points.append(point)
+        notes += more
+    origins = [read_provenance(p.label) for p in points]
+    seen: dict[str, str] = {}
+    for p, origin in zip(points, origins):
+        for key in (str(Path(p.label).resolve()), origin.recording_sha256):
+            if key and key in seen:
+                raise InputError(p.label, f"the same calibration as {seen[key]} (same table or recording): a thermal "
+                                 "fit needs independent calibrations")
+            if key:
+                seen[key] = p.label
+    units = {origin.unit_id for origin in origins} - {None}
+    if len(units) > 1:
+        raise InputError(None, f"the tables are of units {', '.join(sorted(units))}: a thermal model is of one unit")
+    names = [n for n in points[0].params.names if all(n in p.params.names for p in points)]
+    dropped = sorted({n for p in points for n in p.params.names} - set(names))
+    if dropped:
+        notes.append(f"parameters not in every table left out: {', '.join(dropped)}")
+    points = [Point(p.temperature_c, _subset(p.params, names), p.label) for p in points]
+    points.sort(key=lambda p: p.temperature_c)
+    return points, notes, next(iter(units), None)
+
+
+def _subset(params: ParameterSet, names: list[str]) -> ParameterSet:
+    idx = [params.names.index(n) for n in names]
+    if params.covariance is not None:
+        return ParameterSet(params.values[idx], covariance=params.covariance[np.ix_(idx, idx)], names=names)
+    return ParameterSet(params.values[idx], sigma=params.sigma[idx], names=names)

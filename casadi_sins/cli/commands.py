@@ -25,6 +25,7 @@ from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
 from ..nav.navigation import navigate
+from ..report.acceptance import judge, read_acceptance_sheet
 from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
@@ -141,6 +142,7 @@ def cmd_calibrate(args) -> int:
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None
+    sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
         result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
@@ -150,9 +152,10 @@ def cmd_calibrate(args) -> int:
     if args.strict and result.warnings:
         raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
                        + " | ".join(result.warnings))
-    files = {Path(args.out): table_text(result.parameters, truth).encode()}
+    verdict = judge(result.parameters, sheet) if sheet else None
+    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
-                              unit_id=args.unit_id))
+                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
     files.update(export_files(result.parameters, args.out, args.export or (), {
         "unit_id": args.unit_id, "table": str(args.out),
         "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
@@ -171,7 +174,17 @@ def cmd_calibrate(args) -> int:
                   "exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
-    return 0
+    return _verdict_status(verdict)
+
+
+def _verdict_status(verdict) -> int:
+    """Print the verdict against the tolerance sheet; the exit status: 0 (none, or pass), 3 (fail)."""
+    if verdict is None:
+        return 0
+    print(f"verdict: {verdict.verdict.upper()} against {verdict.sheet}")
+    for reason in verdict.reasons:
+        print(f"  {reason}")
+    return 0 if verdict.passed else 3
 
 
 def cmd_compare(args) -> int:

@@ -64,6 +64,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")
     p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
+    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML: its [accept.sigma] and [accept.value] "
+                   "limits give the verdict (report JSON \"verdict\"); exit 3 on fail, the table still written, with "
+                   "an acceptance column marking the parameters out of their limits")
+    p.add_argument("--certificate", action="store_true", help="also write NAME.certificate.html: one self-contained "
+                   "HTML file printable on A4 (unit id, recording hash, table rounded to sigma, checks, verdict)")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")

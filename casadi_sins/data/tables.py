@@ -19,14 +19,19 @@ from ..model.parameters import ParameterSet
 from ..model.registry import groups_in, is_known, model_names, unit_of
 
 
-def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False) -> str:
+def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False,
+               acceptance: dict[str, str] | None = None) -> str:
     """The parameter table CSV (header ``parameter,unit,value,sigma``, more columns after).
 
-    ``truth`` adds truth and error columns; ``as_truth`` gives a truth file (``parameter,unit,value``).
+    ``truth`` adds truth and error columns; ``as_truth`` gives a truth file (``parameter,unit,value``);
+    ``acceptance`` (``{name: "pass" | "fail"}``, from a tolerance sheet) adds the column ``acceptance``
+    (empty for a parameter without a limit), marking the parameters that fail.
     """
     frame = params.to_frame(truth)
     if as_truth:
         frame = frame[["parameter", "unit", "value"]]
+    elif acceptance is not None:
+        frame["acceptance"] = [acceptance.get(n, "") for n in params.names]
     return frame.to_csv(index=False, na_rep="")  # shortest exact form of every float64: full precision
 
 

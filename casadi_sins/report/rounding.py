@@ -63,3 +63,17 @@ def rounded(frame: pd.DataFrame, pairs: dict[str, str], signed: bool = False) ->
         if sig in out:
             out[sig] = [format_sigma(s) for s in frame[sig]]
     return out
+
+
+def parameter_display(data: dict) -> pd.DataFrame:
+    """The report's parameters as people read them: natural units, each value (and error) rounded to the
+    second significant digit of its sigma, the sigma to two digits (text columns)."""
+    frame = pd.DataFrame(data["parameters"])
+    cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
+    cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
+                       zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
+    shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
+    if "error_over_sigma" in shown:
+        shown["error_over_sigma"] = [f"{x:+.2f}" if math.isfinite(x) else "" for x in frame["error_over_sigma"]]
+    return shown[cols]

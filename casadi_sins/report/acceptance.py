@@ -35,7 +35,8 @@ class Verdict:
     def as_dict(self) -> dict:
         """The report JSON's ``"acceptance"`` entry."""
         return {"verdict": self.verdict, "reasons": list(self.reasons), "sheet": self.sheet,
-                "judged": len(self.outcome), "failed": sorted(n for n, o in self.outcome.items() if o == "fail")}
+                "judged": len(self.outcome), "failed": sorted(n for n, o in self.outcome.items() if o == "fail"),
+                "outcome": dict(self.outcome)}
 
 
 def _sigma_reason(name: str, sigma: float, limit: float) -> str | None:

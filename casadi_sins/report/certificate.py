@@ -36,6 +36,10 @@ img { width: 100%; page-break-inside: avoid; }
 .small { font-size: 8pt; color: #333; }
 """.strip()
 
+#: Column headings of the parameter table.
+HEADINGS = {"value_natural": "value", "value_unit": "unit", "sigma_natural": "1-sigma", "sigma_unit": "sigma unit",
+            "error_natural": "error", "error_over_sigma": "error/sigma"}
+
 
 def _e(value) -> str:
     return html.escape("" if value is None else str(value))
@@ -96,9 +100,12 @@ def certificate_html(data: dict, plots: dict[str, bytes] | None = None) -> str:
     rec = data["recording"]
     unit = data.get("unit_id") or "(no unit id given)"
     table = parameter_display(data)
-    outcome = (data.get("acceptance") or {}).get("failed", [])
-    marks = {i: "fail-row" for i, n in enumerate(table["parameter"]) if n in outcome}
-    numeric = {"value_natural", "sigma_natural", "error_natural", "error_over_sigma"}
+    outcome = (data.get("acceptance") or {}).get("outcome")
+    if outcome is not None:
+        table["acceptance"] = [outcome.get(n, "") for n in table["parameter"]]
+    marks = {i: "fail-row" for i, n in enumerate(table["parameter"]) if (outcome or {}).get(n) == "fail"}
+    table = table.rename(columns=HEADINGS)
+    numeric = {HEADINGS[c] for c in ("value_natural", "sigma_natural", "error_natural", "error_over_sigma")}
     warnings = "".join(f"<li>{_e(w)}</li>" for w in data.get("warnings", [])) or "<li>none</li>"
     images = "".join(f'<figure><img alt="{_e(c)}" src="data:image/png;base64,{base64.b64encode(b).decode()}">'
                      f"<figcaption class=\"small\">{_e(c)}</figcaption></figure>" for c, b in (plots or {}).items())

@@ -39,6 +39,7 @@ from ..studies.compare import compare, comparison_files
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
 from ..studies.prediction import predict_file, predict_problem, write_analysis
+from .logs import progress_for, steps_printer
 
 
 class CliError(Exception):
@@ -145,7 +146,7 @@ def cmd_calibrate(args) -> int:
     sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
-        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=steps_printer(args), noise=noise, model=args.model,
                            refine_segments=False, **options)  # refined above: the report shows those times
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
@@ -192,7 +193,7 @@ def cmd_compare(args) -> int:
     rec = read_recording(args.recording)
     truth = read_table(args.truth) if args.truth else None
     try:
-        comparison = compare(rec, truth, progress=print)
+        comparison = compare(rec, truth, progress=steps_printer(args))
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed: {exc}") from None
     write_files(comparison_files(rec, comparison, args.out, truth))
@@ -223,15 +224,12 @@ def cmd_analyze(args) -> int:
 
 def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
-    from tqdm import tqdm
-
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)
     t0 = time.perf_counter()
-    with tqdm(total=args.runs, desc=f"monte carlo {problem.name}", unit="run") as bar:
-        rows = MC.run(problem, seeds, args.solvers, args.workers, progress=lambda k, n: bar.update(k - bar.n),
-                      scheduler=args.dask)
+    with progress_for(args, args.runs, f"monte carlo {problem.name}", "run") as progress:
+        rows = MC.run(problem, seeds, args.solvers, args.workers, progress=progress, scheduler=args.dask)
     elapsed = time.perf_counter() - t0
     summary = MC.with_prediction(MC.summary(rows), predicted)
     write_files(MC.montecarlo_files(problem, rows, summary, args.out, args.runs, elapsed))
@@ -276,7 +274,7 @@ def cmd_budget(args) -> int:
 
 def cmd_demo(args) -> int:
     """``demo``: the main job on the default problem."""
-    demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=print)
+    demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=steps_printer(args))
     comparison = demo.comparison
     print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
     cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]

@@ -23,6 +23,7 @@ from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
+from .logs import progress_for
 
 
 def _number(x) -> str:
@@ -74,13 +75,11 @@ def cmd_history(args) -> int:
 
 def cmd_batch(args) -> int:
     """``batch``: every recording calibrated, the fleet table and the spread across units."""
-    from tqdm import tqdm
-
     options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
     t0 = time.perf_counter()
-    with tqdm(total=len(args.recordings), desc="batch", unit="unit") as bar:
-        fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask,
-                          progress=lambda k, n: bar.update(k - bar.n), resume=not args.no_resume)
+    with progress_for(args, len(args.recordings), "batch", "unit") as progress:
+        fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask, progress=progress,
+                          resume=not args.no_resume)
     spread = spread_frame(fleet)
     fleet = with_outliers(fleet, spread)
     write_files(batch_files(fleet, spread, args.out))

@@ -139,11 +139,11 @@ def cmd_calibrate(args) -> int:
     """``calibrate``: the parameter table, its report, plots and exports, all written together."""
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
+    sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None
-    sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
         result = calibrate(rec, solver=args.solver, initial=initial, progress=steps_printer(args), noise=noise, model=args.model,

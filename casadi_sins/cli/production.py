@@ -12,7 +12,9 @@ from ..core.toml import read_toml
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import read_table
+from ..core.errors import InputError
 from ..data.tolerance import read_tolerance_sheet
+from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
 from ..report.rounding import format_sigma, format_with_sigma
 from ..report.tables import frame_files
@@ -75,20 +77,50 @@ def cmd_history(args) -> int:
 
 def cmd_batch(args) -> int:
     """``batch``: every recording calibrated, the fleet table and the spread across units."""
-    options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
+    if args.tolerance:
+        read_acceptance_sheet(args.tolerance)  # a bad sheet stops the batch before any unit
+    recordings = batch_recordings(args.recordings)
+    options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise,
+                           tolerance=args.tolerance and str(Path(args.tolerance).resolve()),
+                           certificate=args.certificate)
     t0 = time.perf_counter()
-    with progress_for(args, len(args.recordings), "batch", "unit") as progress:
-        fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask, progress=progress,
+    with progress_for(args, len(recordings), "batch", "unit") as progress:
+        fleet = run_batch(recordings, args.out, options, args.workers, args.dask, progress=progress,
                           resume=not args.no_resume)
     spread = spread_frame(fleet)
     fleet = with_outliers(fleet, spread)
     write_files(batch_files(fleet, spread, args.out))
-    print(fleet[["unit_id", "status", "warnings", "outliers", "message"]].to_string(index=False))
+    cols = ["unit_id", "status", *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
+    print(fleet[cols].to_string(index=False))
     failed = int((fleet["status"] == "failed").sum())
+    rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
     resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
-    print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed, {resumed} already done "
+    print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed"
+          + (f", {rejected} out of tolerance" if args.tolerance else "") + f", {resumed} already done "
           f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
-    return 0
+    return 2 if failed else 3 if rejected else 0
+
+
+def batch_recordings(paths) -> list[str]:
+    """The recordings of ``batch``: files as given, and every recording description (``*.toml`` of format
+    sins-recording) in a folder given, in name order."""
+    out = []
+    for path in map(Path, paths):
+        if not path.is_dir():
+            out.append(str(path))
+            continue
+        found = [str(p) for p in sorted(path.glob("*.toml")) if _is_recording_quietly(p)]
+        if not found:
+            raise CliError(f"{path}: no recording description (*.toml, format sins-recording/1) in the folder")
+        out += found
+    return out
+
+
+def _is_recording_quietly(path: Path) -> bool:
+    try:
+        return is_recording(path)
+    except InputError:
+        return False
 
 
 def is_recording(path) -> bool:
@@ -170,7 +202,7 @@ def add_production_commands(sub) -> None:
     p = sub.add_parser("batch", help="calibrate many units' recordings: a fleet table, the spread per parameter "
                        "with outliers, each unit's table and report; resumable")
     p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
-                   "recording's name)")
+                   "recording's name), or folders: every recording description in them")
     p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "
                    "with NAME.report.json/.md")
     p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address (the workers must "
@@ -183,4 +215,9 @@ def add_production_commands(sub) -> None:
     p.add_argument("--noise", help="sensor datasheet TOML of the unit type (see calibrate --noise)")
     p.add_argument("--no-resume", action="store_true", help="calibrate every unit again, even those already done "
                    "from the same recording")
+    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
+                   "each unit's verdict in the fleet table and its report")
+    p.add_argument("--certificate", action="store_true", help="also each unit's units/NAME.certificate.html")
     p.set_defaults(func=cmd_batch)
+    p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
+                "calibrated but some failed its tolerance sheet")

@@ -9,7 +9,9 @@ sigma fails (its uncertainty is not known).  Parameters without a limit are not 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
+from pathlib import Path
 
 from ..core.errors import InputError
 from ..data.tolerance import ToleranceSheet, read_tolerance_sheet
@@ -26,6 +28,7 @@ class Verdict:
     reasons: list[str]
     outcome: dict[str, str]
     sheet: str | None = None
+    sheet_sha256: str | None = None
 
     @property
     def passed(self) -> bool:
@@ -35,6 +38,7 @@ class Verdict:
     def as_dict(self) -> dict:
         """The report JSON's ``"acceptance"`` entry."""
         return {"verdict": self.verdict, "reasons": list(self.reasons), "sheet": self.sheet,
+                "sheet_sha256": self.sheet_sha256,
                 "judged": len(self.outcome), "failed": sorted(n for n, o in self.outcome.items() if o == "fail"),
                 "outcome": dict(self.outcome)}
 
@@ -73,7 +77,15 @@ def judge(params: ParameterSet, sheet: ToleranceSheet) -> Verdict:
             outcome[name] = "fail" if failures else "pass"
             reasons += failures
     source = str(sheet.source) if sheet.source else None
-    return Verdict("fail" if reasons else "pass", reasons, outcome, source)
+    return Verdict("fail" if reasons else "pass", reasons, outcome, source, file_sha256(source) if source else None)
+
+
+def file_sha256(path) -> str | None:
+    """SHA-256 of a file (the sheet a verdict was judged against), None when it cannot be read."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return None
 
 
 def read_acceptance_sheet(path) -> ToleranceSheet:

@@ -30,24 +30,20 @@ from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
 from ..report.provenance import read_provenance
-from ..report.rounding import rounded
+from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
 from ..studies.budget import problem_budget, write_budget
-from ..studies.compare import compare, comparison_files
+from ..studies.compare import compare, comparison_display, comparison_files, summary_display
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
-from ..studies.prediction import predict_file, predict_problem, write_analysis
+from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
 from .logs import progress_for, steps_printer
 
 
 class CliError(Exception):
     """A failure to report to the user in one line, with a non-zero exit status."""
-
-
-def _number_format(digits: int = 4):
-    return lambda x: f"{x:.{digits}g}"
 
 
 def cmd_simulate(args) -> int:
@@ -94,8 +90,10 @@ def cmd_navigate(args) -> int:
         navs[label] = navigate(rec, values)
         print(f"navigated {rec.name} with {label} in {time.perf_counter() - t0:.2f} s")
         table = static_velocity_table(rec, navs[label])
-        write_frame(table, out / f"{rec.file_stem}-{safe_stem(label)}-static", f"{rec.name}: static segments, {label}")
-        print(table.to_string(index=False, float_format=_number_format()))
+        shown = display(table, sigmas=float_columns(table))
+        write_frame(table, out / f"{rec.file_stem}-{safe_stem(label)}-static", f"{rec.name}: static segments, {label}",
+                    display=shown)
+        print(shown.to_string(index=False))
     print(f"wrote {plot_navigation(rec, navs, out / f'{rec.file_stem}-velocity.png')}")
     return 0
 
@@ -197,12 +195,8 @@ def cmd_compare(args) -> int:
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed: {exc}") from None
     write_files(comparison_files(rec, comparison, args.out, truth))
-    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
-    table = comparison.table
-    cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
-    if truth is not None:
-        print(rounded(table, {c: c.replace("error", "sigma") for c in cols if "error" in c}, signed=True)[cols]
-              .to_string(index=False))
+    print(summary_display(comparison.summary).drop(columns=["sigma means"]).to_string(index=False))
+    print(comparison_display(comparison.table).to_string(index=False))
     print(f"wrote the comparison to {args.out}")
     return 0
 
@@ -217,7 +211,7 @@ def cmd_analyze(args) -> int:
         print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
               f"{', '.join(pred.weak) or 'none'}")
     table = write_analysis(predictions, args.out)
-    print(table.to_string(index=False, float_format=_number_format()))
+    print(analysis_display(table).to_string(index=False))
     print(f"wrote the predicted sigma tables and plot to {args.out}")
     return 0
 
@@ -234,7 +228,7 @@ def cmd_montecarlo(args) -> int:
     summary = MC.with_prediction(MC.summary(rows), predicted)
     write_files(MC.montecarlo_files(problem, rows, summary, args.out, args.runs, elapsed))
     failed = rows[rows["failed"] != ""] if "failed" in rows else rows.iloc[:0]
-    print(summary[MC.SUMMARY_COLUMNS].to_string(index=False, float_format=_number_format()))
+    print(MC.summary_display(summary).to_string(index=False))
     print(f"{args.runs} runs in {elapsed:.1f} s ({len(failed)} failed); wrote {args.out}/{problem.name}-montecarlo."
           "{csv,md,png}")
     return 0
@@ -246,7 +240,7 @@ def cmd_navcheck(args) -> int:
     tables = {Path(p).stem: read_table(p).values for p in args.params}
     runs, table = navigation_check(problem, tables, seed=args.seed, duration_s=args.duration_s, align_s=args.align_s)
     write_navigation_check(runs, table, args.out, problem.name)
-    print(table.to_string(index=False, float_format=_number_format()))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {args.out}/{problem.name}-navcheck.{{csv,md,png}}")
     return 0
 
@@ -267,7 +261,7 @@ def cmd_budget(args) -> int:
     budget = problem_budget(problem, nominal, covariance, args.orientation, args.hours)
     table = write_budget(budget, args.out, safe_stem(problem.name))
     print(f"parameter uncertainty from {source}")
-    print(table.to_string(index=False, float_format=_number_format(3)))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {args.out}/{safe_stem(problem.name)}-budget.{{csv,md,png}}")
     return 0
 
@@ -276,13 +270,13 @@ def cmd_demo(args) -> int:
     """``demo``: the main job on the default problem."""
     demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=steps_printer(args))
     comparison = demo.comparison
-    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
-    cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
-    print(rounded(comparison.table[cols], {c: "nlp sigma (natural)" for c in cols[2:4]}, signed=True)
+    print(summary_display(comparison.summary).drop(columns=["sigma means"]).to_string(index=False))
+    shown = comparison_display(comparison.table)
+    print(shown[[c for c in shown.columns if "error" in c or c in ("parameter", "natural unit", "nlp sigma (natural)")]]
           .to_string(index=False))
     print("navigation check, 1 h static free-inertial after alignment:")
-    print(demo.navigation.to_string(index=False, float_format=_number_format()))
+    print(display(demo.navigation, sigmas=float_columns(demo.navigation)).to_string(index=False))
     print("error budget of static navigation with the NLP's parameters (1 sigma, m):")
-    print(demo.budget.to_string(index=False, float_format=_number_format(3)))
+    print(display(demo.budget, sigmas=float_columns(demo.budget)).to_string(index=False))
     print(f"wrote the comparison, navigation check, budget and parameter tables to {args.out}")
     return 0

@@ -16,9 +16,9 @@ from ..core.errors import InputError
 from ..data.tolerance import read_tolerance_sheet
 from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
-from ..report.rounding import format_sigma, format_with_sigma
+from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
 from ..report.tables import frame_files
-from ..studies.apply import apply_files, apply_table
+from ..studies.apply import apply_files, apply_table, check_display
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
@@ -26,10 +26,6 @@ from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
 from .logs import progress_for
-
-
-def _number(x) -> str:
-    return f"{x:.4g}"
 
 
 def cmd_apply(args) -> int:
@@ -40,7 +36,7 @@ def cmd_apply(args) -> int:
     origin = read_provenance(args.table)
     write_files(apply_files(applied, args.out, str(args.table), origin.table_sha256))
     if not applied.check.empty:
-        print(applied.check.to_string(index=False, float_format=_number))
+        print(check_display(applied.check).to_string(index=False))
     for note in applied.notes:
         print(f"note: {note}")
     worst = applied.worst()
@@ -139,13 +135,14 @@ def cmd_navcheck_any(args) -> int:
     runs, table, seg = recording_navigation_check(rec, tables, args.align_s, args.duration_s)
     out = Path(args.out)
     stem = rec.file_stem
+    shown = display(table, sigmas=[c for c in float_columns(table) if "error" in c])
     files = frame_files(table, out / f"{stem}-navcheck", f"{rec.name}: free-inertial navigation on {seg.describe()}, "
-                        f"after {args.align_s:g} s of alignment")
+                        f"after {args.align_s:g} s of alignment", display=shown)
     buffer = io.BytesIO()
     plot_navigation_check(runs, buffer, f"{rec.name}: horizontal position error at rest, after alignment")
     files[out / f"{stem}-navcheck.png"] = buffer.getvalue()
     write_files(files)
-    print(table.to_string(index=False, float_format=_number))
+    print(shown.to_string(index=False))
     print(f"wrote {out}/{stem}-navcheck.{{csv,md,png}}")
     return 0
 
@@ -167,14 +164,15 @@ def cmd_budget_any(args) -> int:
     stem = rec.file_stem
     files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
                         f"source at {orientation} (1 sigma, m); measured white noise {accel_ug:.3g} ug and "
-                        f"{gyro_deg_h:.3g} deg/h per sample; parameter sigma only (no correlations)")
+                        f"{gyro_deg_h:.3g} deg/h per sample; parameter sigma only (no correlations)",
+                        display=display(table, sigmas=float_columns(table)))
     buffer = io.BytesIO()
     plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
     files[out / f"{stem}-budget.png"] = buffer.getvalue()
     write_files(files)
     print(f"measured white noise per sample: accelerometers {accel_ug:.3g} ug, gyros {gyro_deg_h:.3g} deg/h; "
           f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
-    print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
     return 0
 

@@ -57,9 +57,10 @@ def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
             stem.with_name(stem.name + ".md"): md.encode()}
 
 
-def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g") -> None:
-    """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically)."""
-    write_files(frame_files(frame, stem, title, float_format))
+def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g",
+                display: pd.DataFrame | None = None) -> None:
+    """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically; the Markdown from ``display`` when given)."""
+    write_files(frame_files(frame, stem, title, float_format, display))
 
 
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:

@@ -38,9 +38,10 @@ from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import table_text
-from ..model.registry import NAMES, natural_scale_of, natural_unit_of, relative_mask
+from ..model.registry import NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import file_sha256, judge, read_acceptance_sheet
 from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
+from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
 
@@ -223,6 +224,20 @@ def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def spread_display(spread: pd.DataFrame) -> pd.DataFrame:
+    """The spread table as people read it: the median in the report's value units, rounded like every spread
+    column to the median sigma of one unit; the spreads and that sigma to two significant digits."""
+    frame = spread.copy()
+    natural = [natural_value_of(n, v) for n, v in zip(frame["parameter"], frame["median (SI)"])]
+    frame.insert(3, "median", [v for v, _ in natural])
+    frame.insert(4, "value unit", [u for _, u in natural])
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, (v, _), s in
+                       zip(frame["parameter"], natural, frame["median unit sigma"])]
+    shown = display(frame, {"median": "_sigma", "min": "median unit sigma", "max": "median unit sigma"},
+                    sigmas=["robust spread", "std", "median unit sigma"], signed=False)
+    return shown.drop(columns=["median (SI)", "_sigma"]).rename(columns={"unit": "spread unit"})
+
+
 def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path, bytes]:
     """``fleet.csv`` (every value and sigma, full precision), ``fleet.md`` (status per unit) and
     ``fleet-spread.csv/.md``."""
@@ -235,5 +250,5 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
                                           "values and sigma of every parameter in fleet.csv")[out / "fleet.md"]
     files.update(frame_files(spread, out / "fleet-spread", "spread of each parameter across the units (natural "
                              f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
-                             "max(robust spread, median unit sigma)", "%.4g"))
+                             "max(robust spread, median unit sigma)", display=spread_display(spread)))
     return files

@@ -34,6 +34,7 @@ from ..model.registry import CORE_SPANS, N_PARAMS, SCALE_MASK
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
 from ..report.plots import pyplot, save_figure
+from ..report.rounding import display, float_columns
 from ..report.tables import write_frame
 
 # error state: phi (3), dv_E, dv_N, dL, dlon, then the 21 parameter errors
@@ -211,7 +212,8 @@ def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame
     """The budget's table at 1 h and 24 h (CSV, Markdown) and its plot; returns the table."""
     table = budget.table([3600.0, 86400.0])
     write_frame(table, Path(out_dir) / f"{name}-budget",
-                f"{name}: static navigation error by source after calibration (1 sigma, m)")
+                f"{name}: static navigation error by source after calibration (1 sigma, m)",
+                display=display(table, sigmas=float_columns(table)))
     plot_budget(budget, Path(out_dir) / f"{name}-budget.png", f"{name}: error budget of static navigation")
     return table
 

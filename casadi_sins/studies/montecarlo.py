@@ -165,7 +165,8 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
     stem = out / f"{problem.name}-montecarlo"
     files = frame_files(rows, out / f"{problem.name}-montecarlo-runs")
     files.update(frame_files(summary_frame[SUMMARY_COLUMNS], stem, f"{problem.name}: {runs} runs in {elapsed:.0f} s; "
-                             "RMS error against the solver's sigma and the predicted sigma (natural units)"))
+                             "RMS error against the solver's sigma and the predicted sigma (natural units)",
+                             display=summary_display(summary_frame)))
     import io
 
     plot = io.BytesIO()
@@ -177,3 +178,12 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
 #: The columns of the Monte Carlo summary shown to the user.
 SUMMARY_COLUMNS = ["solver", "parameter", "unit", "rms_error", "mean_sigma", "predicted_sigma", "rms_over_predicted",
                    "rms_over_sigma", "max_abs_z", "runs"]
+
+
+def summary_display(summary_frame: pd.DataFrame) -> pd.DataFrame:
+    """The summary as people read it (Markdown, terminal): RMS and sigmas to two significant digits in
+    natural units, the ratios to two decimals."""
+    from ..report.rounding import display
+
+    return display(summary_frame[SUMMARY_COLUMNS], sigmas=["rms_error", "mean_sigma", "predicted_sigma"],
+                   ratios=["rms_over_predicted", "rms_over_sigma", "max_abs_z"])

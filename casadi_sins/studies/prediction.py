@@ -31,6 +31,7 @@ from ..model.registry import ACCEL_SCALE, CORE_SPANS, GYRO_SCALE, GROUPS, N_PARA
 from ..noise.kalman import NoiseSystem
 from ..noise.plan import plan_noise
 from ..report.plots import pyplot, save_figure
+from ..report.rounding import display
 from ..report.tables import write_frame
 from ..sim import simulate
 
@@ -179,16 +180,24 @@ def plot_predictions(predictions: list[Prediction], path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
+def analysis_display(table: pd.DataFrame) -> pd.DataFrame:
+    """The schedules' predicted sigmas as people read them: two significant digits, natural units."""
+    return display(table, sigmas=[c for c in table.columns if c.endswith(" sigma")])
+
+
 def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.DataFrame:
     """Write each prediction's table and the comparison (CSV, Markdown, PNG); returns the comparison."""
     out_dir = Path(out_dir)
     for pred in predictions:
         write_table(out_dir / f"{pred.name}-predicted.csv", pred.nominal)
-        write_frame(pred.frame(), out_dir / f"{pred.name}-predicted-natural",
-                    f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}")
+        frame = pred.frame()
+        write_frame(frame, out_dir / f"{pred.name}-predicted-natural",
+                    f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}",
+                    display=display(frame, {"value": "sigma"}, sigmas=["sigma (natural)"]))
     table = comparison_frame(predictions)
     if len(predictions) > 1:
-        write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)")
+        write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)",
+                    display=analysis_display(table))
     plot_predictions(predictions, out_dir / ("schedules-predicted.png" if len(predictions) > 1
                                              else f"{predictions[0].name}-predicted.png"))
     return table

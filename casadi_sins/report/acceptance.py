@@ -13,6 +13,8 @@ import hashlib
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..core.errors import InputError
 from ..data.tolerance import ToleranceSheet, read_tolerance_sheet
 from ..model.parameters import ParameterSet
@@ -43,12 +45,17 @@ class Verdict:
                 "outcome": dict(self.outcome)}
 
 
+def _limit(x: float) -> str:
+    """A limit as the sheet gives it, never in exponent form."""
+    return np.format_float_positional(x, trim="-")
+
+
 def _sigma_reason(name: str, sigma: float, limit: float) -> str | None:
     unit = natural_unit_of(name)
     if not math.isfinite(sigma):
-        return f"{name}: no sigma (its uncertainty is not known), limit {limit:g} {unit}"
+        return f"{name}: no sigma (its uncertainty is not known), limit {_limit(limit)} {unit}"
     if sigma > limit:
-        return f"{name}: sigma {format_sigma(sigma)} {unit} above the limit {limit:g} {unit}"
+        return f"{name}: sigma {format_sigma(sigma)} {unit} above the limit {_limit(limit)} {unit}"
     return None
 
 
@@ -58,7 +65,7 @@ def _value_reason(name: str, value: float, sigma_natural: float, bounds: tuple[f
     if low <= shown <= high:
         return None
     text = format_with_sigma(shown, sigma_in_value_unit(name, shown, sigma_natural))
-    allowed = f"|value| <= {high:g}" if low == -high else f"within [{low:g}, {high:g}]"
+    allowed = f"|value| <= {_limit(high)}" if low == -high else f"within [{_limit(low)}, {_limit(high)}]"
     return f"{name}: value {text} {unit} not {allowed} {unit}"
 
 

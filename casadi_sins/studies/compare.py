@@ -65,8 +65,8 @@ def summary_table(rec: Recording, results: dict[str, CalibrationResult],
 
 def comparison_display(table: pd.DataFrame) -> pd.DataFrame:
     """The comparison as people read it: each solver's value in the report's value units (ug, deg/h, arcsec;
-    pulse weights) rounded to its sigma, sigmas to two digits, the difference and the errors rounded to the
-    smaller sigma, error/sigma to two decimals; natural units labelled."""
+    pulse weights) rounded to its sigma, sigmas to two digits, each error rounded to its solver's sigma and the
+    difference to the smaller sigma, error/sigma to two decimals; natural units labelled."""
     solvers = [c[: -len(" value")] for c in table.columns if c.endswith(" value")]
     frame = table[["parameter"]].copy()
     frame["value unit"] = [natural_value_of(n, 1.0)[1] for n in table["parameter"]]
@@ -85,7 +85,8 @@ def comparison_display(table: pd.DataFrame) -> pd.DataFrame:
     for col in table.columns:
         if col.endswith("(natural)") and ("error" in col or " - " in col):
             frame[col] = table[col]
-            pairs[col] = "_smallest"
+            own = col.replace(" error (natural)", " sigma (natural)")
+            pairs[col] = own if own in frame and own != col else "_smallest"
         elif col.endswith("error/sigma"):
             frame[col] = table[col]
             ratios.append(col)

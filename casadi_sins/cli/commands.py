@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import sys
 import time
@@ -26,7 +27,7 @@ from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
 from ..nav.navigation import navigate
 from ..report.acceptance import judge, read_acceptance_sheet
-from ..report.calibration import recording_hash, report_files
+from ..report.calibration import companion_paths, recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
 from ..report.provenance import read_provenance
@@ -155,8 +156,10 @@ def cmd_calibrate(args) -> int:
     files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
+    report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
     files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "table": str(args.out),
+        "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
+        "calibrated_with": report["software"],
         "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
         "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
     write_files(files)

@@ -9,7 +9,6 @@ sigma fails (its uncertainty is not known).  Parameters without a limit are not 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import math
 from pathlib import Path
 
@@ -19,6 +18,7 @@ from ..core.errors import InputError
 from ..data.tolerance import ToleranceSheet, read_tolerance_sheet
 from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of, natural_value_of
+from .provenance import file_sha256
 from .rounding import format_sigma, format_with_sigma, sigma_in_value_unit
 
 
@@ -84,13 +84,13 @@ def judge(params: ParameterSet, sheet: ToleranceSheet) -> Verdict:
             outcome[name] = "fail" if failures else "pass"
             reasons += failures
     source = str(sheet.source) if sheet.source else None
-    return Verdict("fail" if reasons else "pass", reasons, outcome, source, file_sha256(source) if source else None)
+    return Verdict("fail" if reasons else "pass", reasons, outcome, source, sheet_sha256(source) if source else None)
 
 
-def file_sha256(path) -> str | None:
-    """SHA-256 of a file (the sheet a verdict was judged against), None when it cannot be read."""
+def sheet_sha256(path) -> str | None:
+    """SHA-256 of the sheet a verdict was judged against, None when it cannot be read."""
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return file_sha256(path)
     except OSError:
         return None
 

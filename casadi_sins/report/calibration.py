@@ -27,7 +27,7 @@ from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS
 from ..core.units import DEG_PER_H, UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
-from ..model.parameters import ParameterSet, natural_errors
+from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..core.text import markdown_text
 from .acceptance import Verdict
@@ -65,7 +65,7 @@ def _files_hash(files: tuple) -> str:
 def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> list[dict]:
     """One row per parameter: SI value and sigma, natural value and sigma, error against a truth."""
     sigma = params.natural_sigma()
-    errors = natural_errors(params, truth) if truth is not None else None
+    errors = truth_errors(params, truth) if truth is not None else None
     rows = []
     for i, name in enumerate(params.names):
         value, unit = natural_value_of(name, params.values[i])
@@ -75,7 +75,10 @@ def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> l
                "sigma_unit": natural_unit_of(name)}
         if errors is not None:
             err = float(errors[i])
-            row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
+            if not math.isfinite(err):  # the truth file does not give this parameter
+                row.update(error_natural=None, error_over_sigma=None)
+            else:
+                row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
         rows.append(row)
     return rows
 

@@ -75,7 +75,8 @@ def parameter_display(data: dict) -> pd.DataFrame:
                        zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
     shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
     if "error_over_sigma" in shown:
-        shown["error_over_sigma"] = [f"{x:+.2f}" if math.isfinite(x) else "" for x in frame["error_over_sigma"]]
+        shown["error_over_sigma"] = [f"{x:+.2f}" if isinstance(x, (int, float)) and math.isfinite(x) else ""
+                                     for x in frame["error_over_sigma"]]
     return shown[cols]
 
 

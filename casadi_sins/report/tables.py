@@ -13,7 +13,7 @@ from ..core.text import markdown_text, one_line
 from ..core.units import UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
-from ..model.parameters import ParameterSet, natural_errors
+from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import group_of, natural_value_of
 from .rounding import format_sigma, format_with_sigma, rounded, sigma_in_value_unit
 from ..nav.navigation import GroupNavigation, static_velocities
@@ -83,8 +83,8 @@ def parameter_report(result, truth: ParameterSet | None = None) -> pd.DataFrame:
     frame = pd.DataFrame({"parameter": params.names, "unit": params.units, "value": params.values,
                           "natural unit": params.natural_units, "sigma (natural)": params.natural_sigma()})
     if truth is not None:
-        err = natural_errors(params, truth)
-        frame["truth"] = truth.aligned(params.names)
+        err = truth_errors(params, truth)
+        frame["truth"] = [truth[n] if n in truth.names else np.nan for n in params.names]
         frame["error (natural)"] = err
         frame["error/sigma"] = err / frame["sigma (natural)"]
     return frame

@@ -39,7 +39,7 @@ from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import table_text
 from ..model.registry import NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
-from ..report.acceptance import file_sha256, judge, read_acceptance_sheet
+from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
 from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
@@ -137,7 +137,7 @@ def remove_stale(out_dir, rec_path) -> None:
 def same_sheet(data: dict, options: BatchOptions) -> bool:
     """Whether a finished unit's report was judged against the sheet of this batch (or neither was judged)."""
     judged = (data.get("acceptance") or {}).get("sheet_sha256")
-    return judged == (file_sha256(options.tolerance) if options.tolerance else None)
+    return judged == (sheet_sha256(options.tolerance) if options.tolerance else None)
 
 
 def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOptions(), workers: int | None = None,

@@ -13,7 +13,7 @@ from ..calibrate import calibrate
 from ..calibrate.result import CalibrationResult
 from ..data.recording import Recording
 from ..data.tables import table_text
-from ..model.parameters import ParameterSet, natural_errors
+from ..model.parameters import ParameterSet, natural_errors, truth_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..report.plots import plot_residuals, static_residuals
 from ..report.rounding import display, sigma_in_value_unit
@@ -44,7 +44,7 @@ def comparison_table(results: dict[str, CalibrationResult], truth: ParameterSet 
     if truth is not None:
         frame["truth"] = truth.aligned(rows)
         for name in names:
-            err = column(results[name], natural_errors(results[name].parameters, truth))
+            err = column(results[name], truth_errors(results[name].parameters, truth))
             frame[f"{name} error (natural)"] = err
             frame[f"{name} error/sigma"] = err / frame[f"{name} sigma (natural)"]
     return frame

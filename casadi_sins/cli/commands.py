@@ -206,10 +206,14 @@ def cmd_compare(args) -> int:
 
 def cmd_analyze(args) -> int:
     """``analyze``: predicted accuracy of schedules."""
+    if args.accel_noise_ug is not None or args.gyro_noise_deg_h is not None:
+        raise CliError("--accel-noise-ug and --gyro-noise-deg-h (white noise per sample) are gone: give the densities "
+                       "as calibrate's --noise datasheet does, --accel-vrw-ug-rthz (ug/sqrt(Hz)) and "
+                       "--gyro-arw-deg-rth (deg/sqrt(h)); per-sample sigma = density x sqrt(rate)")
     predictions = []
     for path in args.inputs:
         t0 = time.perf_counter()
-        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h, model=args.model)
+        pred = predict_file(path, args.accel_vrw_ug_rthz, args.gyro_arw_deg_rth, model=args.model)
         predictions.append(pred)
         print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
               f"{', '.join(pred.weak) or 'none'}")

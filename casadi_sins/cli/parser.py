@@ -28,7 +28,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--name", help="recording name (default PROBLEM-seedN)")
     p.add_argument("--no-noise", action="store_true", help="leave out the sensor noise")
     p.add_argument("--quantize", action="store_true", help="integer pulses, remainder carried")
-    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg")
+    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg (default: "
+                   "the problem's start_attitude_deg)")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("validate", help="read and check a recording; print its summary")
@@ -79,7 +80,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
     p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
     p.add_argument("--name", help="recording name (default: the output's stem)")
-    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment (s)")
+    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment, s "
+                   "(default 20)")
     p.add_argument("--out", required=True, help="recording description NAME.toml to write")
     p.set_defaults(func=cmd_segment)
 
@@ -101,12 +103,15 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p = sub.add_parser("analyze", help="predicted accuracy of schedules before any data (problem or recording)")
     p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--accel-noise-ug", type=float, help="accelerometer white noise per sample (default: the "
-                   "problem's, or measured in the recording)")
-    p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
-                   "problem's, or measured in the recording)")
+    p.add_argument("--accel-vrw-ug-rthz", type=float, help="accelerometer white noise density (velocity random "
+                   "walk), ug/sqrt(Hz), as in a --noise datasheet (default: the problem's, or measured in the recording)")
+    p.add_argument("--gyro-arw-deg-rth", type=float, help="gyro white noise density (angle random walk), "
+                   "deg/sqrt(h), as in a --noise datasheet (default: the problem's, or measured in the recording)")
+    p.add_argument("--accel-noise-ug", type=float, help=argparse.SUPPRESS)  # the old per-sample form: refused
+    p.add_argument("--gyro-noise-deg-h", type=float, help=argparse.SUPPRESS)
     p.add_argument("--model", default="21", choices=["21", "extended"],
-                   help="extended: also predict the extra terms (quadratic scale, lever arms, time offset)")
+                   help="21: the paper's parameters (default); extended: also predict the extra terms (quadratic "
+                   "scale, lever arms, time offset)")
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")
@@ -155,6 +160,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     add_production_commands(sub)
     for name in LONG_COMMANDS:
         add_log_options(sub.choices[name])
+    for action in sub._choices_actions:  # each command's --help starts with its one-line description
+        sub.choices[action.dest].description = sub.choices[action.dest].description or action.help
     return parser
 
 

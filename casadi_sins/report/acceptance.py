@@ -15,10 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.files import file_sha256
 from ..data.tolerance import ToleranceSheet, read_tolerance_sheet
 from ..model.parameters import ParameterSet
 from ..model.registry import natural_unit_of, natural_value_of
-from .provenance import file_sha256
 from .rounding import format_sigma, format_with_sigma, sigma_in_value_unit
 
 

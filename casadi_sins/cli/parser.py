@@ -107,8 +107,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    "walk), ug/sqrt(Hz), as in a --noise datasheet (default: the problem's, or measured in the recording)")
     p.add_argument("--gyro-arw-deg-rth", type=float, help="gyro white noise density (angle random walk), "
                    "deg/sqrt(h), as in a --noise datasheet (default: the problem's, or measured in the recording)")
-    p.add_argument("--accel-noise-ug", type=float, help=argparse.SUPPRESS)  # the old per-sample form: refused
-    p.add_argument("--gyro-noise-deg-h", type=float, help=argparse.SUPPRESS)
+    p.add_argument("--accel-noise-ug", type=float, help="refused (the old per-sample form): use --accel-vrw-ug-rthz")
+    p.add_argument("--gyro-noise-deg-h", type=float, help="refused (the old per-sample form): use --gyro-arw-deg-rth")
     p.add_argument("--model", default="21", choices=["21", "extended"],
                    help="21: the paper's parameters (default); extended: also predict the extra terms (quadratic "
                    "scale, lever arms, time offset)")

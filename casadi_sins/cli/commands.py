@@ -16,7 +16,7 @@ from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
 from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
-from ..core.text import one_line
+from ..core.text import one_line, plural
 from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
@@ -116,7 +116,7 @@ def cmd_segment(args) -> int:
     for note in notes:
         print(f"note: {note}")
     print(recording_summary(rec))
-    print(f"wrote {out}: {len(rec.segments)} segments in {len(rec.group_ids)} groups")
+    print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
 
 
@@ -165,7 +165,7 @@ def cmd_calibrate(args) -> int:
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
-          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
+          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {Path(args.report)}/" if args.report else ""))
     for sensor, wander in result.noise.bias_wander.items():
         if not wander.included:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"

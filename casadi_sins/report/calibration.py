@@ -29,7 +29,7 @@ from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
-from ..core.text import markdown_text
+from ..core.text import markdown_text, plural
 from .acceptance import Verdict
 from .certificate import certificate_html
 from .plots import noise_plot, residual_plot
@@ -182,8 +182,8 @@ def report_markdown(data: dict) -> str:
              f"- software: {data['software']}, created {data['created']}",
              "- versions: " + ", ".join(f"{k} {v}" for k, v in data.get("versions", {}).items()),
              f"- recording: {markdown_text(rec['source'] or '(in memory)')}, sha256 `{rec['sha256']}`",
-             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
-             f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
+             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {plural(rec['groups'], 'group')}, "
+             f"{plural(rec['segments'], 'segment')}; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
     if data.get("command"):
         lines.append(f"- command: {markdown_text(data['command'])}")
     lines += _verdict_lines(data)

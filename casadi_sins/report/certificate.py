@@ -16,6 +16,7 @@ import math
 
 import pandas as pd
 
+from ..core.text import plural
 from .rounding import parameter_display
 
 #: A4 portrait, the table on as few pages as it fits; colours that survive a black-and-white printer.
@@ -112,8 +113,8 @@ def certificate_html(data: dict, plots: dict[str, bytes] | None = None) -> str:
     identity = [("unit id", f"<b>{_e(unit)}</b>"), ("recording", _e(rec.get("source") or rec.get("name"))),
                 ("recording sha256", f'<span class="hash">{_e(rec.get("sha256"))}</span>'),
                 ("calibrated", _e(data.get("created"))),
-                ("data", f"{rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, "
-                         f"{rec['segments']} segments"),
+                ("data", f"{rec['samples']} samples at {rec['rate_hz']:g} Hz, {plural(rec['groups'], 'group')}, "
+                         f"{plural(rec['segments'], 'segment')}"),
                 *_conditions(data),
                 ("solver", f"{_e(data.get('solver'))}, {'converged' if data.get('converged') else 'NOT converged'}"
                            f", {data.get('iterations')} iterations; sigma: {_e(data.get('sigma_meaning'))}")]

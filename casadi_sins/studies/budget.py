@@ -33,7 +33,7 @@ from ..model.noise import SensorNoise
 from ..model.registry import CORE_SPANS, N_PARAMS, SCALE_MASK
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
 from ..report.tables import write_frame
 
@@ -202,7 +202,7 @@ def plot_budget(budget: Budget, path: str | Path, title: str) -> Path:
         ax.set_xlabel("time (h)")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("m")
-    axes[1].legend(fontsize=8, loc="lower right")
+    legend_outside(axes[1], fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
     return save_figure(fig, path)

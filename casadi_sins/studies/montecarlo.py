@@ -15,7 +15,7 @@ from ..data.problem import Problem
 from ..model.noise import SensorNoise
 from ..model.parameters import joint_chi_square, natural_errors
 from ..model.registry import CORE_SPANS, NAMES, group_of
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..sim import simulate
 from .parallel import run_all
 
@@ -128,7 +128,7 @@ def plot_summary(summary_frame: pd.DataFrame, path) -> object:
         ax.set_xticks(x + width * len(solvers) / 2, [n.split("_", 2)[-1] for n in names])
         ax.set_title(f"{label} ({unit})", fontsize=10)
         ax.set_ylim(bottom=0)
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle("Monte Carlo: RMS error per parameter against the predicted sigma")
     fig.tight_layout()
     return save_figure(fig, path)

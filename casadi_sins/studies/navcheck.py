@@ -17,7 +17,7 @@ import pandas as pd
 from ..calibrate.initial import rough_parameters
 from ..data.problem import GroupPlan, Problem, Timing
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
 from ..report.tables import write_frame
 from ..sim import simulate
@@ -57,7 +57,7 @@ def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: st
     ax.axhline(1.0, color="k", ls=":", lw=0.8, label="1 nmile")
     ax.set_xlabel("time of free-inertial navigation (min)")
     ax.set_ylabel("horizontal position error (nmile)")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.set_title(title)
     return save_figure(fig, path)
 

@@ -30,7 +30,7 @@ from ..model.parameters import ParameterSet
 from ..model.registry import ACCEL_SCALE, CORE_SPANS, GYRO_SCALE, GROUPS, N_PARAMS, NAMES, group_of, groups_in, model_names, natural_unit_of
 from ..noise.kalman import NoiseSystem
 from ..noise.plan import plan_noise
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display
 from ..report.tables import write_frame
 from ..sim import simulate
@@ -174,7 +174,7 @@ def plot_predictions(predictions: list[Prediction], path: str | Path) -> Path:
         ax.set_xticks(x + width * (len(predictions) - 1) / 2, names)
         ax.set_title(f"{label} ({unit}, 1 sigma)", fontsize=10)
         ax.set_ylim(bottom=0)
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle("Predicted accuracy of each schedule (covariance of the NLP's linearisation)")
     fig.tight_layout()
     return save_figure(fig, path)

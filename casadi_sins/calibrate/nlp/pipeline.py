@@ -249,8 +249,7 @@ def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
     record(run.noise_plan, run.wander)
     message = describe(run.wander)
     if message:
-        run.warnings.append(message)
-        run.say(f"warning: {message}")
+        run.warnings.append(message)  # shown once with the result's warnings (the CLI's WARNING lines)
     return fit
 
 
@@ -309,9 +308,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     separation_checks, separation_text = separation_warnings(params, run.wander)
     assessment.checks += separation_checks
     assessment.warnings += separation_text
-    warnings = run.warnings + run.noise_plan.warnings + assessment.warnings
-    for message in assessment.warnings:
-        run.say(f"warning: {message}")
+    warnings = run.warnings + run.noise_plan.warnings + assessment.warnings  # shown once, with the result
     stats = fit.ipopt_stats
     details = NlpDetails(stats["return_status"], int(stats["iter_count"]), fit.gls_steps, fit.use_rotation_steps,
                          fit.rotation_step_ratio, offsets, start_attitudes, groups_in(names), run.selection,

@@ -135,3 +135,15 @@ def test_calibrate_refuses_a_sheet_without_acceptance_limits_before_computing(tm
                  "--tolerance", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sheet.toml" in err and "no acceptance limits" in err
+
+
+def test_the_shipped_example_sheet_accepts_the_papers_unit(kang_nlp):
+    from casadi_sins.problems import __file__ as problems_init
+    from pathlib import Path
+
+    s = read_tolerance_sheet(Path(problems_init).parent / "tolerance-navgrade.toml")
+    assert len(s.accept_sigma) == 21 and s.change and s.drift_per_year
+    v = judge(kang_nlp.parameters, s)
+    assert v.passed, v.reasons
+    sloppy = ParameterSet(kang_nlp.parameters.values, sigma=kang_nlp.parameters.sigma * 10)
+    assert not judge(sloppy, s).passed  # ten times the schedule's sigma: refused

@@ -58,7 +58,9 @@ def cmd_simulate(args) -> int:
     if changes:
         problem = problem.with_changes(**changes)
     t0 = time.perf_counter()
-    sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name and safe_stem(args.name))
+    with progress_for(args, 1, f"simulate {problem.name}", "") as progress:
+        sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name and safe_stem(args.name),
+                       progress=progress)
     path = write_simulation(sim, args.out)
     print(f"wrote {path} (+ .csv, .truth.csv): {len(sim.recording.time)} samples, {time.perf_counter() - t0:.1f} s")
     return 0

@@ -91,7 +91,7 @@ class Progress:
         elapsed = now - self._start
         left = (f", about {_duration(elapsed * (1 - fraction) / fraction)} left"
                 if 0 < fraction < 1 else "")
-        count = f"{self.done:g}/{self.total:g} {self.unit}s " if self.done.is_integer() else ""
+        count = f"{self.done:g}/{self.total:g} {self.unit}s " if self.unit and self.done.is_integer() else ""
         print(f"{self.desc}: {count}({100 * fraction:.0f} %), {_duration(elapsed)} elapsed{left}",
               file=self.stream, flush=True)
         self._last_time, self._last_fraction = now, fraction

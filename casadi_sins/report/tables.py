@@ -120,7 +120,7 @@ def natural_table(frame):
                         "sigma unit": frame["natural unit"]})
     if "error (natural)" in frame:
         out["error"] = [format_with_sigma(e, s, signed=True) for e, s in zip(frame["error (natural)"], sigma)]
-        out["error/sigma"] = [f"{e:+.2f}" for e in frame["error/sigma"]]
+        out["error/sigma"] = [f"{e:+.2f}" if np.isfinite(e) else "" for e in frame["error/sigma"]]
     return out
 
 

@@ -47,3 +47,23 @@ def test_every_long_command_takes_quiet_and_no_progress(capsys):
             pass
         text = capsys.readouterr().out
         assert "--quiet" in text and "--no-progress" in text, name
+
+
+def test_montecarlo_with_stderr_to_a_file_writes_no_carriage_return(tmp_path):
+    import os
+    import subprocess
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "problems" / "kang2013.toml").read_text()
+    problem = tmp_path / "short.toml"
+    problem.write_text(text.replace("static_s = 100.0", "static_s = 8.0").replace("rotation_s = 10.0",
+                                                                                    "rotation_s = 4.0"))
+    with open(tmp_path / "err.txt", "wb") as err, open(tmp_path / "out.txt", "wb") as out:
+        done = subprocess.run([sys.executable, "-m", "casadi_sins", "montecarlo", str(problem), "--runs", "2",
+                               "--solvers", "ils", "--workers", "1", "--out", str(tmp_path / "mc")],
+                              stdout=out, stderr=err, env={**os.environ, "OMP_NUM_THREADS": "1"}, timeout=600)
+    assert done.returncode == 0, (tmp_path / "err.txt").read_text()
+    logged = (tmp_path / "err.txt").read_bytes()
+    assert b"\r" not in logged and b"\r" not in (tmp_path / "out.txt").read_bytes()
+    lines = logged.decode().splitlines()
+    assert any("2/2 runs (100 %)" in line for line in lines), lines

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 import shutil
 import subprocess
@@ -57,8 +58,11 @@ def main_bench() -> None:
     out.mkdir(parents=True, exist_ok=True)
     problem = load_problem()
     problem = dataclasses.replace(problem, timing=dataclasses.replace(problem.timing, static_s=30.0, rotation_s=6.0))
+    out = out.resolve()
+    here = os.getcwd()
     with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
+        os.chdir(tmp)  # the certificate names the recording and the sheet as the line would: relative paths
+        tmp = Path(".")
         rec = write_simulation(simulate(problem, seed=7, name="SN-0042"), tmp)
         t0 = time.perf_counter()
         assert main(["calibrate", str(rec), "--out", str(tmp / "P.csv"), "--quiet"]) == 0
@@ -72,6 +76,7 @@ def main_bench() -> None:
         page = tmp / "P.certificate.html"
         shutil.copy(page, out / "certificate.html")
         found = render(page, out)
+        os.chdir(here)
     size_kb = (out / "certificate.html").stat().st_size / 1024
     (out / "certificate.md").write_text(
         "# Calibration certificate rendered by headless Chromium\n\n"

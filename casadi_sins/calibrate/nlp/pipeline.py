@@ -269,7 +269,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, unmodelled, fit.z, fit.use_rotation_steps,
                                     run.progress, update_free=False)
     fit.ipopt_stats = stats
-    first = [c for c in assessment.checks if not c.passed]
+    first = [c for c in assessment.checks if not c.passed and c.value > c.limit]  # beyond (not below) the model
     assessment = assess(graph, fit, run.noise_plan)
     final = {c.name: c for c in assessment.checks}
     failed = [f"{c.name} {c.value:.3g} against the limit {c.limit:.3g}" + (
@@ -278,8 +278,8 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
     run.warnings += unmodelled_at_bounds(unmodelled)
-    run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)} in the Checks "
-                        "table, which is of the final fit): errors outside the model "
+    run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
+                        "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
                         f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "
                         f"mean{step}; sigma includes them")

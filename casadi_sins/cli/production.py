@@ -4,6 +4,7 @@ unit's own recording.  Parsing and printing only; the work is in :mod:`studies`.
 from __future__ import annotations
 
 import io
+import math
 import time
 from pathlib import Path
 
@@ -159,18 +160,21 @@ def cmd_budget_any(args) -> int:
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
     budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
+    # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
+    noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
+             "deg/sqrt(h)")
     table = budget.table([3600.0, args.hours * 3600.0] if args.hours != 1.0 else [3600.0])
     out = Path(args.out)
     stem = rec.file_stem
     files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {accel_ug:.3g} ug and "
-                        f"{gyro_deg_h:.3g} deg/h per sample; parameter sigma only (no correlations)",
+                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter sigma "
+                        "only (no correlations)",
                         display=display(table, sigmas=float_columns(table)))
     buffer = io.BytesIO()
     plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
     files[out / f"{stem}-budget.png"] = buffer.getvalue()
     write_files(files)
-    print(f"measured white noise per sample: accelerometers {accel_ug:.3g} ug, gyros {gyro_deg_h:.3g} deg/h; "
+    print(f"measured white noise: {noise}; "
           f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
     print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")

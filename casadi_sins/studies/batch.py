@@ -33,7 +33,7 @@ import pandas as pd
 from ..calibrate import calibrate
 from ..core.errors import InputError
 from ..core.files import safe_stem, write_files
-from ..core.text import one_line
+from ..core.text import one_line, plural
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
@@ -243,11 +243,14 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
     ``fleet-spread.csv/.md``."""
     out = Path(out_dir)
     failed = int((fleet["status"] == "failed").sum())
-    files = frame_files(fleet, out / "fleet", f"{len(fleet)} units, {failed} failed")
+    rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
+    counts = (f"{plural(len(fleet), 'unit')}, {failed} failed"
+              + (f", {rejected} out of tolerance" if "verdict" in fleet and fleet["verdict"].any() else ""))
+    files = frame_files(fleet, out / "fleet", counts)
     summary = fleet[[c for c in ("unit_id", "status", "verdict", "warnings", "outliers", "message", "resumed")
                      if c in fleet]]
-    files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {len(fleet)} units, {failed} failed; "
-                                          "values and sigma of every parameter in fleet.csv")[out / "fleet.md"]
+    files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {counts}; values and sigma of every "
+                                          "parameter in fleet.csv")[out / "fleet.md"]
     files.update(frame_files(spread, out / "fleet-spread", "spread of each parameter across the units (natural "
                              f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
                              "max(robust spread, median unit sigma)", display=spread_display(spread)))

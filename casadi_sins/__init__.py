@@ -15,6 +15,11 @@ Typical use::
     from casadi_sins import read_recording, calibrate, write_table
     result = calibrate(read_recording("unit42.toml"))
     write_table("unit42.csv", result.parameters)
+
+and on the line, a table applied to raw pulses in a DataFrame (as ``casadi-sins apply`` does)::
+
+    from casadi_sins import read_table
+    increments = read_table("unit42.csv").compensate(raw)   # columns time, gyro_x.., accel_x..
 """
 
 from .calibrate import CalibrationError, CalibrationResult, calibrate
@@ -22,9 +27,9 @@ from .core.errors import InputError
 from .core.version import __version__
 from .data.description import read_recording, write_recording
 from .data.problem import load_problem
-from .data.tables import read_table, write_table
+from .data.tables import Table, read_table, write_table
 from .model.parameters import ParameterSet
 from .sim import simulate
 
-__all__ = ["__version__", "CalibrationError", "CalibrationResult", "InputError", "ParameterSet", "calibrate",
+__all__ = ["__version__", "CalibrationError", "CalibrationResult", "InputError", "ParameterSet", "Table", "calibrate",
            "load_problem", "read_recording", "read_table", "simulate", "write_recording", "write_table"]

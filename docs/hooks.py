@@ -9,6 +9,9 @@
   and every public module of the package must have a ``::: casadi_sins...`` entry on an API page;
   otherwise the build warns (an error under ``mkdocs build --strict``).
 * No page may point outside the repository (``../`` above the repository root).
+* Equations: ``$$ ... $$`` (a block on lines of its own) and ``\\( ... \\)`` (inline) in LaTeX are
+  typeset as MathML when the site is built (``latex2mathml``), which browsers render themselves: no
+  script and nothing fetched from outside, as for the fonts.
 """
 
 from __future__ import annotations
@@ -39,7 +42,31 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
             LOG.warning("%s links to %s, outside the repository", page.file.src_path, target)
     if MARKER in markdown:
         markdown = markdown.replace(MARKER, cli_reference())
-    return markdown
+    return typeset_math(markdown)
+
+
+FENCE = re.compile(r"^(```|~~~).*?^\1[ \t]*$", re.MULTILINE | re.DOTALL)
+DISPLAY = re.compile(r"^\$\$[ \t]*\n(.+?)\n\$\$[ \t]*$", re.MULTILINE | re.DOTALL)
+INLINE = re.compile(r"\\\((.+?)\\\)")
+
+
+def typeset_math(markdown: str) -> str:
+    """LaTeX ``$$ ... $$`` blocks and ``\\( ... \\)`` spans as MathML, outside fenced code."""
+    from latex2mathml.converter import convert
+
+    def block(match):
+        return "\n" + convert(" ".join(match.group(1).split()), display="block") + "\n"
+
+    def inline(match):
+        return convert(match.group(1))
+
+    parts, last = [], 0
+    for fence in FENCE.finditer(markdown):
+        parts.append(INLINE.sub(inline, DISPLAY.sub(block, markdown[last:fence.start()])))
+        parts.append(fence.group(0))
+        last = fence.end()
+    parts.append(INLINE.sub(inline, DISPLAY.sub(block, markdown[last:])))
+    return "".join(parts)
 
 
 def on_post_build(config) -> None:

@@ -173,7 +173,8 @@ class CalibrationResult:
         lines = [f"{self.solver}: {self.message} ({self.nit} iterations, {self.wall_time:.2f} s); "
                  f"whitened residual rms {self.residual_rms:.3g}, variance factor {self.variance_factor:.3g}"]
         if self.noise.sources:
-            lines.append("noise: " + ", ".join(f"{k} from {v}" for k, v in self.noise.sources.items()))
+            lines.append("noise: " + ", ".join(f"{k} {v}" if v == "not modelled" else f"{k} from {v}"
+                                               for k, v in self.noise.sources.items()))
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import sys
 import time
@@ -15,7 +16,7 @@ from ..calibrate.initial import rough_parameters
 from ..calibrate.result import CalibrationError
 from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
-from ..core.text import one_line
+from ..core.text import one_line, plural
 from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
@@ -25,27 +26,25 @@ from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
 from ..nav.navigation import navigate
-from ..report.calibration import recording_hash, report_files
+from ..report.acceptance import judge, read_acceptance_sheet
+from ..report.calibration import companion_paths, recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
 from ..report.provenance import read_provenance
-from ..report.rounding import rounded
+from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
 from ..studies.budget import problem_budget, write_budget
-from ..studies.compare import compare, comparison_files
+from ..studies.compare import compare, comparison_display, comparison_files, summary_display
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
-from ..studies.prediction import predict_file, predict_problem, write_analysis
+from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
+from .logs import progress_for, steps_printer
 
 
 class CliError(Exception):
     """A failure to report to the user in one line, with a non-zero exit status."""
-
-
-def _number_format(digits: int = 4):
-    return lambda x: f"{x:.{digits}g}"
 
 
 def cmd_simulate(args) -> int:
@@ -59,7 +58,9 @@ def cmd_simulate(args) -> int:
     if changes:
         problem = problem.with_changes(**changes)
     t0 = time.perf_counter()
-    sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name and safe_stem(args.name))
+    with progress_for(args, 1, f"simulate {problem.name}", "") as progress:
+        sim = simulate(problem, seed=args.seed, noise=not args.no_noise, name=args.name and safe_stem(args.name),
+                       progress=progress)
     path = write_simulation(sim, args.out)
     print(f"wrote {path} (+ .csv, .truth.csv): {len(sim.recording.time)} samples, {time.perf_counter() - t0:.1f} s")
     return 0
@@ -92,8 +93,10 @@ def cmd_navigate(args) -> int:
         navs[label] = navigate(rec, values)
         print(f"navigated {rec.name} with {label} in {time.perf_counter() - t0:.2f} s")
         table = static_velocity_table(rec, navs[label])
-        write_frame(table, out / f"{rec.file_stem}-{safe_stem(label)}-static", f"{rec.name}: static segments, {label}")
-        print(table.to_string(index=False, float_format=_number_format()))
+        shown = display(table, sigmas=float_columns(table))
+        write_frame(table, out / f"{rec.file_stem}-{safe_stem(label)}-static", f"{rec.name}: static segments, {label}",
+                    display=shown)
+        print(shown.to_string(index=False))
     print(f"wrote {plot_navigation(rec, navs, out / f'{rec.file_stem}-velocity.png')}")
     return 0
 
@@ -115,7 +118,7 @@ def cmd_segment(args) -> int:
     for note in notes:
         print(f"note: {note}")
     print(recording_summary(rec))
-    print(f"wrote {out}: {len(rec.segments)} segments in {len(rec.group_ids)} groups")
+    print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
 
 
@@ -137,32 +140,36 @@ def cmd_calibrate(args) -> int:
     """``calibrate``: the parameter table, its report, plots and exports, all written together."""
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
+    sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
-        result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
+        result = calibrate(rec, solver=args.solver, initial=initial, progress=steps_printer(args), noise=noise, model=args.model,
                            refine_segments=False, **options)  # refined above: the report shows those times
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
     if args.strict and result.warnings:
         raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
                        + " | ".join(result.warnings))
-    files = {Path(args.out): table_text(result.parameters, truth).encode()}
+    verdict = judge(result.parameters, sheet) if sheet else None
+    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
-                              unit_id=args.unit_id))
+                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
+    report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
     files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "table": str(args.out),
+        "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
+        "calibrated_with": report["software"],
         "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
         "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
-          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {args.report}/" if args.report else ""))
-    for sensor, wander in result.noise.bias_wander.items():
-        if not wander.included:
+          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {Path(args.report)}/" if args.report else ""))
+    for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
+        if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"
             seen = ("the static data's misfit taken for model mismatch" if wander.mismatch
                     else "no significant wander in the static data")
@@ -171,7 +178,17 @@ def cmd_calibrate(args) -> int:
                   "exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
-    return 0
+    return _verdict_status(verdict)
+
+
+def _verdict_status(verdict) -> int:
+    """Print the verdict against the tolerance sheet; the exit status: 0 (none, or pass), 3 (fail)."""
+    if verdict is None:
+        return 0
+    print(f"verdict: {verdict.verdict.upper()} against {verdict.sheet}")
+    for reason in verdict.reasons:
+        print(f"  {reason}")
+    return 0 if verdict.passed else 3
 
 
 def cmd_compare(args) -> int:
@@ -179,51 +196,48 @@ def cmd_compare(args) -> int:
     rec = read_recording(args.recording)
     truth = read_table(args.truth) if args.truth else None
     try:
-        comparison = compare(rec, truth, progress=print)
+        comparison = compare(rec, truth, progress=steps_printer(args))
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed: {exc}") from None
     write_files(comparison_files(rec, comparison, args.out, truth))
-    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
-    table = comparison.table
-    cols = [c for c in table.columns if "error (natural)" in c or c in ("parameter", "natural unit")]
-    if truth is not None:
-        print(rounded(table, {c: c.replace("error", "sigma") for c in cols if "error" in c}, signed=True)[cols]
-              .to_string(index=False))
+    print(summary_display(comparison.summary).drop(columns=["sigma means"]).to_string(index=False))
+    print(comparison_display(comparison.table).to_string(index=False))
     print(f"wrote the comparison to {args.out}")
     return 0
 
 
 def cmd_analyze(args) -> int:
     """``analyze``: predicted accuracy of schedules."""
+    if args.accel_noise_ug is not None or args.gyro_noise_deg_h is not None:
+        raise CliError("--accel-noise-ug and --gyro-noise-deg-h (white noise per sample) are gone: give the densities "
+                       "as calibrate's --noise datasheet does, --accel-vrw-ug-rthz (ug/sqrt(Hz)) and "
+                       "--gyro-arw-deg-rth (deg/sqrt(h)); per-sample sigma = density x sqrt(rate)")
     predictions = []
     for path in args.inputs:
         t0 = time.perf_counter()
-        pred = predict_file(path, args.accel_noise_ug, args.gyro_noise_deg_h, model=args.model)
+        pred = predict_file(path, args.accel_vrw_ug_rthz, args.gyro_arw_deg_rth, model=args.model)
         predictions.append(pred)
         print(f"{pred.name}: predicted in {time.perf_counter() - t0:.1f} s; weakly observable: "
               f"{', '.join(pred.weak) or 'none'}")
     table = write_analysis(predictions, args.out)
-    print(table.to_string(index=False, float_format=_number_format()))
+    print(analysis_display(table).to_string(index=False))
     print(f"wrote the predicted sigma tables and plot to {args.out}")
     return 0
 
 
 def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
-    from tqdm import tqdm
-
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)
     t0 = time.perf_counter()
-    with tqdm(total=args.runs, desc=f"monte carlo {problem.name}", unit="run") as bar:
-        rows = MC.run(problem, seeds, args.solvers, args.workers, progress=lambda k, n: bar.update(k - bar.n),
-                      scheduler=args.dask)
+    with progress_for(args, args.runs, f"monte carlo {problem.name}", "run") as progress:
+        rows = MC.run(problem, seeds, args.solvers, args.workers, progress=progress, scheduler=args.dask)
     elapsed = time.perf_counter() - t0
     summary = MC.with_prediction(MC.summary(rows), predicted)
     write_files(MC.montecarlo_files(problem, rows, summary, args.out, args.runs, elapsed))
     failed = rows[rows["failed"] != ""] if "failed" in rows else rows.iloc[:0]
-    print(summary[MC.SUMMARY_COLUMNS].to_string(index=False, float_format=_number_format()))
+    print(MC.summary_display(summary).to_string(index=False))
     print(f"{args.runs} runs in {elapsed:.1f} s ({len(failed)} failed); wrote {args.out}/{problem.name}-montecarlo."
           "{csv,md,png}")
     return 0
@@ -235,7 +249,7 @@ def cmd_navcheck(args) -> int:
     tables = {Path(p).stem: read_table(p).values for p in args.params}
     runs, table = navigation_check(problem, tables, seed=args.seed, duration_s=args.duration_s, align_s=args.align_s)
     write_navigation_check(runs, table, args.out, problem.name)
-    print(table.to_string(index=False, float_format=_number_format()))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {args.out}/{problem.name}-navcheck.{{csv,md,png}}")
     return 0
 
@@ -256,22 +270,22 @@ def cmd_budget(args) -> int:
     budget = problem_budget(problem, nominal, covariance, args.orientation, args.hours, names)
     table = write_budget(budget, args.out, safe_stem(problem.name))
     print(f"parameter uncertainty from {source}")
-    print(table.to_string(index=False, float_format=_number_format(3)))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {args.out}/{safe_stem(problem.name)}-budget.{{csv,md,png}}")
     return 0
 
 
 def cmd_demo(args) -> int:
     """``demo``: the main job on the default problem."""
-    demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=print)
+    demo = run_demo(load_problem(args.problem), args.seed, args.out, progress=steps_printer(args))
     comparison = demo.comparison
-    print(comparison.summary.drop(columns=["sigma means"]).to_string(index=False, float_format=_number_format()))
-    cols = ["parameter", "natural unit", "nlp error (natural)", "ils error (natural)", "nlp sigma (natural)"]
-    print(rounded(comparison.table[cols], {c: "nlp sigma (natural)" for c in cols[2:4]}, signed=True)
+    print(summary_display(comparison.summary).drop(columns=["sigma means"]).to_string(index=False))
+    shown = comparison_display(comparison.table)
+    print(shown[[c for c in shown.columns if "error" in c or c in ("parameter", "natural unit", "nlp sigma (natural)")]]
           .to_string(index=False))
     print("navigation check, 1 h static free-inertial after alignment:")
-    print(demo.navigation.to_string(index=False, float_format=_number_format()))
+    print(display(demo.navigation, sigmas=float_columns(demo.navigation)).to_string(index=False))
     print("error budget of static navigation with the NLP's parameters (1 sigma, m):")
-    print(demo.budget.to_string(index=False, float_format=_number_format(3)))
+    print(display(demo.budget, sigmas=float_columns(demo.budget)).to_string(index=False))
     print(f"wrote the comparison, navigation check, budget and parameter tables to {args.out}")
     return 0

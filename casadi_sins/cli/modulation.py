@@ -18,6 +18,7 @@ from ..studies.modulation.outputs import COMPARISON, NAUTICAL_MILE, modulation_f
 from ..studies.modulation.schemes import CLOSURE_TOL, closure_error, load_scheme
 from ..studies.modulation.sources import load_sheet
 from .commands import CliError
+from .logs import progress_for
 
 
 def _finite(args, *names: str) -> None:
@@ -81,7 +82,7 @@ def cmd_modulate(args) -> int:
     for name, s in doc["schemes"].items():
         print(f"{name}: max horizontal position error {s['max_horizontal_position_error_m']:.4g} m "
               f"({s['max_horizontal_position_error_m'] / NAUTICAL_MILE:.3g} nmi) at {s['time_of_max_h']:.3g} h, "
-              f"max velocity error {s['max_velocity_error_mps']:.3g} m/s ({s['compute_s']:.2f} s)")
+              f"max velocity error {s['max_velocity_error_mps']:.3g} m/s; computed in {s['compute_s']:.2f} s")
     print(f"wrote {args.out}/modulation.{{json,md}}" + ("" if args.no_plots else " and plots"))
     return 0
 
@@ -96,9 +97,10 @@ def cmd_modulate_mc(args) -> int:
     warnings: list[str] = []
     site, sources = site_and_sources(args)
     schemes = schemes_of(args, warnings)
-    results = run_schemes(schemes, sources, site, args.hours, aligned=args.initial == "aligned",
-                          workers=args.workers, runs=args.runs, seed=args.seed, turn_step_deg=args.turn_step_deg,
-                          matched=not args.plain)
+    with progress_for(args, len(schemes), "modulate-mc", "scheme") as progress:
+        results = run_schemes(schemes, sources, site, args.hours, aligned=args.initial == "aligned",
+                              workers=args.workers, runs=args.runs, seed=args.seed, turn_step_deg=args.turn_step_deg,
+                              matched=not args.plain, progress=progress)
     write_files(montecarlo_files(results, warnings, args.out))
     for res in results:
         for group, v in res["groups"].items():

@@ -8,6 +8,7 @@ from ..core.version import __version__
 from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_validate)
+from .logs import LONG_COMMANDS, add_log_options
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 from .thermal import add_thermal_command, cmd_export_any, cmd_simulate_any
@@ -29,7 +30,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--name", help="recording name (default PROBLEM-seedN)")
     p.add_argument("--no-noise", action="store_true", help="leave out the sensor noise")
     p.add_argument("--quantize", action="store_true", help="integer pulses, remainder carried")
-    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg")
+    p.add_argument("--start-attitude-deg", type=float, help="start attitude deviation per angle, deg (default: "
+                   "the problem's start_attitude_deg)")
     p.set_defaults(func=cmd_simulate_any)  # a thermal problem ([thermal]): one recording per setpoint
 
     p = sub.add_parser("validate", help="read and check a recording; print its summary")
@@ -67,6 +69,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")
     p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
+    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML: its [accept.sigma] and [accept.value] "
+                   "limits give the verdict (report JSON \"verdict\"); exit 3 on fail, the table still written, with "
+                   "an acceptance column marking the parameters out of their limits")
+    p.add_argument("--certificate", action="store_true", help="also write NAME.certificate.html: one self-contained "
+                   "HTML file printable on A4 (unit id, recording hash, table rounded to sigma, checks, verdict)")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")
@@ -76,7 +83,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
     p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
     p.add_argument("--name", help="recording name (default: the output's stem)")
-    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment (s)")
+    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment, s "
+                   "(default 20)")
     p.add_argument("--out", required=True, help="recording description NAME.toml to write")
     p.set_defaults(func=cmd_segment)
 
@@ -98,12 +106,16 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p = sub.add_parser("analyze", help="predicted accuracy of schedules before any data (problem or recording)")
     p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--accel-noise-ug", type=float, help="accelerometer white noise per sample (default: the "
-                   "problem's, or measured in the recording)")
-    p.add_argument("--gyro-noise-deg-h", type=float, help="gyro white noise per sample (default: the "
-                   "problem's, or measured in the recording)")
+    p.add_argument("--accel-vrw-ug-rthz", type=float, help="accelerometer white noise density (velocity random "
+                   "walk), ug/sqrt(Hz), as in a --noise datasheet (default: the problem's, or measured in the recording)")
+    p.add_argument("--gyro-arw-deg-rth", type=float, help="gyro white noise density (angle random walk), "
+                   "deg/sqrt(h), as in a --noise datasheet (default: the problem's, or measured in the recording)")
+    p.add_argument("--accel-noise-ug", type=float, help="refused (the old per-sample form): use --accel-vrw-ug-rthz")
+    p.add_argument("--gyro-noise-deg-h", type=float, help="refused (the old per-sample form): use --gyro-arw-deg-rth")
     p.add_argument("--model", default="21", choices=["21", "extended"],
-                   help="extended: also predict the extra groups of the registry (quadratic and cross-quadratic terms, lever arms, time offset, gyro g-sensitivity and scale asymmetry)")
+                   help="21: the paper's parameters (default); extended: also predict the extra groups of the "
+                   "registry (quadratic and cross-quadratic terms, lever arms, time offset, gyro g-sensitivity and "
+                   "scale asymmetry)")
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("montecarlo", help="simulate and calibrate many seeds: RMS error against sigma")
@@ -151,6 +163,10 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     _add_modulation(sub)
     add_production_commands(sub)
     add_thermal_command(sub)
+    for name in LONG_COMMANDS:
+        add_log_options(sub.choices[name])
+    for action in sub._choices_actions:  # each command's --help starts with its one-line description
+        sub.choices[action.dest].description = sub.choices[action.dest].description or action.help
     return parser
 
 

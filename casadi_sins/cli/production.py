@@ -4,6 +4,7 @@ unit's own recording.  Parsing and printing only; the work is in :mod:`studies`.
 from __future__ import annotations
 
 import io
+import math
 import time
 from pathlib import Path
 
@@ -12,22 +13,21 @@ from ..core.toml import read_toml
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import read_table
+from ..core.errors import InputError
 from ..data.tolerance import read_tolerance_sheet
+from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
-from ..report.rounding import format_sigma, format_with_sigma
+from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
 from ..report.tables import frame_files
-from ..studies.apply import apply_files
+from ..studies.apply import apply_files, check_display
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
+from .logs import progress_for
 from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
-
-
-def _number(x) -> str:
-    return f"{x:.4g}"
 
 
 def cmd_apply(args) -> int:
@@ -38,7 +38,7 @@ def cmd_apply(args) -> int:
     origin = read_provenance(table)
     write_files(apply_files(applied, args.out, str(table), origin.table_sha256))
     if not applied.check.empty:
-        print(applied.check.to_string(index=False, float_format=_number))
+        print(check_display(applied.check).to_string(index=False))
     for note in applied.notes:
         print(f"note: {note}")
     worst = applied.worst()
@@ -75,22 +75,50 @@ def cmd_history(args) -> int:
 
 def cmd_batch(args) -> int:
     """``batch``: every recording calibrated, the fleet table and the spread across units."""
-    from tqdm import tqdm
-
-    options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
+    if args.tolerance:
+        read_acceptance_sheet(args.tolerance)  # a bad sheet stops the batch before any unit
+    recordings = batch_recordings(args.recordings)
+    options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise,
+                           tolerance=args.tolerance and str(Path(args.tolerance).resolve()),
+                           certificate=args.certificate)
     t0 = time.perf_counter()
-    with tqdm(total=len(args.recordings), desc="batch", unit="unit") as bar:
-        fleet = run_batch(args.recordings, args.out, options, args.workers, args.dask,
-                          progress=lambda k, n: bar.update(k - bar.n), resume=not args.no_resume)
+    with progress_for(args, len(recordings), "batch", "unit") as progress:
+        fleet = run_batch(recordings, args.out, options, args.workers, args.dask, progress=progress,
+                          resume=not args.no_resume)
     spread = spread_frame(fleet)
     fleet = with_outliers(fleet, spread)
     write_files(batch_files(fleet, spread, args.out))
-    print(fleet[["unit_id", "status", "warnings", "outliers", "message"]].to_string(index=False))
+    cols = ["unit_id", "status", *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
+    print(fleet[cols].to_string(index=False))
     failed = int((fleet["status"] == "failed").sum())
+    rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
     resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
-    print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed, {resumed} already done "
+    print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed"
+          + (f", {rejected} out of tolerance" if args.tolerance else "") + f", {resumed} already done "
           f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
-    return 0
+    return 2 if failed else 3 if rejected else 0
+
+
+def batch_recordings(paths) -> list[str]:
+    """The recordings of ``batch``: files as given, and every recording description (``*.toml`` of format
+    sins-recording) in a folder given, in name order."""
+    out = []
+    for path in map(Path, paths):
+        if not path.is_dir():
+            out.append(str(path))
+            continue
+        found = [str(p) for p in sorted(path.glob("*.toml")) if _is_recording_quietly(p)]
+        if not found:
+            raise CliError(f"{path}: no recording description (*.toml, format sins-recording/1) in the folder")
+        out += found
+    return out
+
+
+def _is_recording_quietly(path: Path) -> bool:
+    try:
+        return is_recording(path)
+    except InputError:
+        return False
 
 
 def is_recording(path) -> bool:
@@ -109,13 +137,14 @@ def cmd_navcheck_any(args) -> int:
     runs, table, seg = recording_navigation_check(rec, tables, args.align_s, args.duration_s)
     out = Path(args.out)
     stem = rec.file_stem
+    shown = display(table, sigmas=[c for c in float_columns(table) if "error" in c])
     files = frame_files(table, out / f"{stem}-navcheck", f"{rec.name}: free-inertial navigation on {seg.describe()}, "
-                        f"after {args.align_s:g} s of alignment")
+                        f"after {args.align_s:g} s of alignment", display=shown)
     buffer = io.BytesIO()
     plot_navigation_check(runs, buffer, f"{rec.name}: horizontal position error at rest, after alignment")
     files[out / f"{stem}-navcheck.png"] = buffer.getvalue()
     write_files(files)
-    print(table.to_string(index=False, float_format=_number))
+    print(shown.to_string(index=False))
     print(f"wrote {out}/{stem}-navcheck.{{csv,md,png}}")
     return 0
 
@@ -132,19 +161,23 @@ def cmd_budget_any(args) -> int:
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
     budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
+    # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
+    noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
+             "deg/sqrt(h)")
     table = budget.table([3600.0, args.hours * 3600.0] if args.hours != 1.0 else [3600.0])
     out = Path(args.out)
     stem = rec.file_stem
     files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {accel_ug:.3g} ug and "
-                        f"{gyro_deg_h:.3g} deg/h per sample; parameter sigma only (no correlations)")
+                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter sigma "
+                        "only (no correlations)",
+                        display=display(table, sigmas=float_columns(table)))
     buffer = io.BytesIO()
     plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
     files[out / f"{stem}-budget.png"] = buffer.getvalue()
     write_files(files)
-    print(f"measured white noise per sample: accelerometers {accel_ug:.3g} ug, gyros {gyro_deg_h:.3g} deg/h; "
+    print(f"measured white noise: {noise}; "
           f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
-    print(table.to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
     return 0
 
@@ -173,7 +206,7 @@ def add_production_commands(sub) -> None:
     p = sub.add_parser("batch", help="calibrate many units' recordings: a fleet table, the spread per parameter "
                        "with outliers, each unit's table and report; resumable")
     p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
-                   "recording's name)")
+                   "recording's name), or folders: every recording description in them")
     p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "
                    "with NAME.report.json/.md")
     p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address (the workers must "
@@ -186,4 +219,9 @@ def add_production_commands(sub) -> None:
     p.add_argument("--noise", help="sensor datasheet TOML of the unit type (see calibrate --noise)")
     p.add_argument("--no-resume", action="store_true", help="calibrate every unit again, even those already done "
                    "from the same recording")
+    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
+                   "each unit's verdict in the fleet table and its report")
+    p.add_argument("--certificate", action="store_true", help="also each unit's units/NAME.certificate.html")
     p.set_defaults(func=cmd_batch)
+    p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
+                "calibrated but some failed its tolerance sheet")

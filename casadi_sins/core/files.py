@@ -8,6 +8,7 @@ Every command writes its outputs through :func:`write_files` (all together or no
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import tempfile
 from pathlib import Path
@@ -167,3 +168,12 @@ def write_files(files: dict) -> list[Path]:
             raise OutputError(f"{current}: cannot be written ({exc.strerror or exc})") from None
         raise
     return [path for _, path in staged]
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

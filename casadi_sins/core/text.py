@@ -28,3 +28,8 @@ def markdown_text(text, limit: int = 2000) -> str:
 def code_comment(text, limit: int = 200) -> str:
     """``text`` for a one-line comment of MATLAB, C or TOML: one line, no comment terminators."""
     return one_line(text, limit).replace("*/", "* /").replace("%{", "% {").replace("%}", "% }")
+
+
+def plural(count: int, word: str) -> str:
+    """``"1 group"``, ``"3 groups"``."""
+    return f"{count} {word}{'' if count == 1 else 's'}"

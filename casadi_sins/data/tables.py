@@ -7,26 +7,93 @@ file has ``parameter,unit,value``.  Rows of the extra groups follow the paper's 
 from __future__ import annotations
 
 import csv
+import dataclasses
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from ..core.errors import InputError, shown
 from ..core.files import atomic_write_text
 from ..core.inputs import check_input_file
 from ..core.units import TO_SI, dimension_of
+from ..model.output import compensate_table, compensation_matrices
 from ..model.parameters import ParameterSet
 from ..model.registry import groups_in, is_known, model_names, unit_of
+from .recording import PULSE_COLUMNS
 
 
-def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False) -> str:
+@dataclasses.dataclass
+class Table(ParameterSet):
+    """A parameter table as :func:`read_table` gives it: a :class:`ParameterSet` that compensates raw data.
+
+    Examples
+    --------
+    >>> table = read_table("unit42.csv")                      # doctest: +SKIP
+    >>> increments = table.compensate(raw)                    # raw pulses in, rad and m/s out  # doctest: +SKIP
+    >>> table.write("copy.csv")                               # doctest: +SKIP
+    """
+
+    def compensate(self, raw: pd.DataFrame, rate_hz: float | None = None) -> pd.DataFrame:
+        """Raw pulses compensated with the table, as ``apply`` writes them.
+
+        Parameters
+        ----------
+        raw : DataFrame
+            Columns ``gyro_x..z`` and ``accel_x..z`` (pulses per sample), and ``time`` (s) unless
+            ``rate_hz`` is given; other columns are kept unchanged.
+        rate_hz : float, optional
+            The sample rate (default: from the time column, as the recording description states it).
+
+        Returns
+        -------
+        DataFrame
+            The same rows and columns, ``gyro_*`` as angle increments (rad) and ``accel_*`` as velocity
+            increments (m/s) per sample (eq. 1 inverted and every extra group's correction,
+            :func:`model.output.compensate_table`), as ``apply`` writes them.
+        """
+        missing = [c for c in PULSE_COLUMNS if c not in raw.columns]
+        if missing:
+            raise ValueError(f"the raw data lack the columns {', '.join(missing)}")
+        dt = 1.0 / (rate_hz if rate_hz is not None else _rate_of(raw))
+        dtheta, dv = compensate_table(raw[list(PULSE_COLUMNS[:3])].to_numpy(float),
+                                      raw[list(PULSE_COLUMNS[3:])].to_numpy(float), self.values, self.names, dt)
+        out = raw.copy()
+        out[list(PULSE_COLUMNS)] = np.hstack([dtheta, dv])
+        return out
+
+    def matrices(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Per sensor (``"gyro"``, ``"accel"``) ``(M, c)`` with ``increment = M dN + c dt`` (SI; the exports')."""
+        return compensation_matrices(self.values)
+
+    def write(self, path: str | Path) -> Path:
+        """Write the table CSV (:func:`write_table`); :func:`read_table` reads it back exactly."""
+        return write_table(path, self)
+
+
+def _rate_of(raw: pd.DataFrame) -> float:
+    """The sample rate of a time column, to 9 significant digits (as a description's ``rate_hz``)."""
+    if "time" not in raw.columns or len(raw) < 2:
+        raise ValueError("give rate_hz, or a time column of at least two samples")
+    step = float(np.median(np.diff(raw["time"].to_numpy(float))))
+    if not step > 0:
+        raise ValueError("the time column does not increase")
+    return float(f"{1.0 / step:.9g}")
+
+
+def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False,
+               acceptance: dict[str, str] | None = None) -> str:
     """The parameter table CSV (header ``parameter,unit,value,sigma``, more columns after).
 
-    ``truth`` adds truth and error columns; ``as_truth`` gives a truth file (``parameter,unit,value``).
+    ``truth`` adds truth and error columns; ``as_truth`` gives a truth file (``parameter,unit,value``);
+    ``acceptance`` (``{name: "pass" | "fail"}``, from a tolerance sheet) adds the column ``acceptance``
+    (empty for a parameter without a limit), marking the parameters that fail.
     """
     frame = params.to_frame(truth)
     if as_truth:
         frame = frame[["parameter", "unit", "value"]]
+    elif acceptance is not None:
+        frame["acceptance"] = [acceptance.get(n, "") for n in params.names]
     return frame.to_csv(index=False, na_rep="")  # shortest exact form of every float64: full precision
 
 
@@ -40,8 +107,8 @@ def write_table(path: str | Path, params: ParameterSet, truth: ParameterSet | No
 MAX_TABLE_BYTES = 1_000_000
 
 
-def read_table(path: str | Path) -> ParameterSet:
-    """Read a parameter table or truth file; values in other known units are converted to SI.
+def read_table(path: str | Path) -> Table:
+    """Read a parameter table or truth file (a :class:`Table`); values in other known units are converted to SI.
 
     Every row must have exactly the header's number of fields.
 
@@ -63,8 +130,7 @@ def read_table(path: str | Path) -> ParameterSet:
     if missing:
         raise InputError(path, f"missing parameters {', '.join(missing)}")
     sig = np.array([sigmas[n] for n in names])
-    return ParameterSet(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig,
-                        names=names)
+    return Table(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig, names=names)
 
 
 def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:

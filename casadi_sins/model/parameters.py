@@ -45,6 +45,14 @@ def natural_errors(estimate, truth, names=None) -> np.ndarray:
     return parameter_errors(estimate, truth, names) / natural_scale_of(names)
 
 
+def truth_errors(estimate: "ParameterSet", truth: "ParameterSet") -> np.ndarray:
+    """:func:`natural_errors` of an estimate against a truth file, ``nan`` where the truth does not give the
+    parameter (a truth file of the 21 against an extended estimate: the extra terms' errors are unknown, not
+    their distance from the prior)."""
+    known = np.array([n in truth.names for n in estimate.names])
+    return np.where(known, natural_errors(estimate, truth), np.nan)
+
+
 def joint_chi_square(estimate: "ParameterSet", truth: "ParameterSet") -> float:
     """The errors of an estimate against a truth, weighed by the estimate's own covariance.
 
@@ -168,8 +176,8 @@ class ParameterSet:
             frame["sigma_natural"] = self.natural_sigma()
             frame["natural_unit"] = natural
         if truth is not None:
-            frame["truth"] = truth.aligned(names)
-            frame["error_natural"] = natural_errors(self, truth)
+            frame["truth"] = [truth[n] if n in truth.names else np.nan for n in names]
+            frame["error_natural"] = truth_errors(self, truth)
             frame["natural_unit"] = natural
         return frame
 

@@ -28,11 +28,13 @@ from ..core.units import DEG_PER_H, UG
 from ..data.conditions import conditions_dict
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
-from ..model.parameters import ParameterSet, natural_errors
+from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
-from ..core.text import markdown_text
+from ..core.text import markdown_text, plural
+from .acceptance import Verdict
+from .certificate import certificate_html
 from .plots import noise_plot, residual_plot
-from .rounding import rounded, sigma_in_value_unit
+from .rounding import parameter_display
 from .tables import calibration_tables, markdown_table, natural_noise_frame
 
 
@@ -64,7 +66,7 @@ def _files_hash(files: tuple) -> str:
 def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> list[dict]:
     """One row per parameter: SI value and sigma, natural value and sigma, error against a truth."""
     sigma = params.natural_sigma()
-    errors = natural_errors(params, truth) if truth is not None else None
+    errors = truth_errors(params, truth) if truth is not None else None
     rows = []
     for i, name in enumerate(params.names):
         value, unit = natural_value_of(name, params.values[i])
@@ -74,7 +76,10 @@ def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> l
                "sigma_unit": natural_unit_of(name)}
         if errors is not None:
             err = float(errors[i])
-            row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
+            if not math.isfinite(err):  # the truth file does not give this parameter
+                row.update(error_natural=None, error_over_sigma=None)
+            else:
+                row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
         rows.append(row)
     return rows
 
@@ -115,8 +120,9 @@ def _wander_dict(wander: dict) -> dict | None:
 
 
 def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None, command: str | None = None,
-                unit_id: str | None = None) -> dict:
-    """Everything of the report as plain data (the JSON file)."""
+                unit_id: str | None = None, verdict: Verdict | None = None) -> dict:
+    """Everything of the report as plain data (the JSON file); with a ``verdict`` (:func:`report.acceptance.judge`)
+    also ``"verdict"`` (``"pass"`` or ``"fail"``) and ``"acceptance"`` (its reasons and sheet)."""
     raw = result.noise.raw
     checks = [c.as_dict() for c in result.checks]
     motion = result.base_motion
@@ -164,6 +170,9 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         data["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection}
     if result.ils is not None:
         data["equations"] = result.ils.equations
+    if verdict is not None:
+        data["verdict"] = verdict.verdict
+        data["acceptance"] = verdict.as_dict()
     return data
 
 
@@ -175,11 +184,12 @@ def report_markdown(data: dict) -> str:
              f"- software: {data['software']}, created {data['created']}",
              "- versions: " + ", ".join(f"{k} {v}" for k, v in data.get("versions", {}).items()),
              f"- recording: {markdown_text(rec['source'] or '(in memory)')}, sha256 `{rec['sha256']}`",
-             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {rec['groups']} groups, {rec['segments']} "
-             f"segments; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
+             f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {plural(rec['groups'], 'group')}, "
+             f"{plural(rec['segments'], 'segment')}; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
     if data.get("command"):
         lines.append(f"- command: {markdown_text(data['command'])}")
     lines += _conditions_lines(data.get("conditions"))
+    lines += _verdict_lines(data)
     status = "converged" if data["converged"] else "NOT converged"
     if "ipopt" in data:
         ip = data["ipopt"]
@@ -193,13 +203,7 @@ def report_markdown(data: dict) -> str:
     lines += ["", "## Warnings", ""]
     lines += [f"- **{markdown_text(w)}**" for w in data["warnings"]] or ["- none"]
     lines += ["", "## Parameters", ""]
-    frame = pd.DataFrame(data["parameters"])
-    cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
-    cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
-    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
-                       zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
-    shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
-    lines.append(markdown_table(shown[cols], "%.3g"))
+    lines.append(markdown_table(parameter_display(data), "%.3g"))
     lines += ["", "Values rounded to the second significant digit of their sigma; the full SI values (the table "
               "to load) are in the CSV; scale-factor sigma in ppm of the value.", "",
               "## Noise", ""]
@@ -248,6 +252,14 @@ def _conditions_lines(conditions: dict | None) -> list[str]:
                 text += f" ({conditions['temperature_source']})"
             lines.append(f"- {word}: {text}")
     return lines + [""]
+def _verdict_lines(data: dict) -> list[str]:
+    """The verdict against the tolerance sheet and its reasons (Markdown list lines; none without a sheet)."""
+    if "verdict" not in data:
+        return []
+    acc = data.get("acceptance") or {}
+    lines = [f"- **verdict: {data['verdict'].upper()}** against {markdown_text(acc.get('sheet') or 'the tolerance sheet')}"
+             f" ({acc.get('judged', 0)} parameters with a limit)"]
+    return lines + [f"  - {markdown_text(r)}" for r in acc.get("reasons", [])]
 
 
 def _wander_sentence(sensor: str, v: dict) -> str:
@@ -289,23 +301,37 @@ def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
     return stem.with_name(stem.name + ".report.json"), stem.with_name(stem.name + ".report.md")
 
 
+def certificate_path(table_path: str | Path) -> Path:
+    """``NAME.certificate.html`` beside a parameter table ``NAME.csv``."""
+    stem = Path(table_path).with_suffix("")
+    return stem.with_name(stem.name + ".certificate.html")
+
+
 def report_files(result: CalibrationResult, rec: Recording, table_path: str | Path, report_dir: str | Path | None = None,
                  truth: ParameterSet | None = None, command: str | None = None,
-                 unit_id: str | None = None) -> dict[Path, bytes]:
-    """Every file of a calibration's report, as ``{path: content}`` (written together by the caller)."""
-    data = report_data(result, rec, truth, command, unit_id)
+                 unit_id: str | None = None, verdict: Verdict | None = None,
+                 certificate: bool = False) -> dict[Path, bytes]:
+    """Every file of a calibration's report, as ``{path: content}`` (written together by the caller); with
+    ``certificate`` also the self-contained HTML certificate ``NAME.certificate.html`` (:mod:`report.certificate`)."""
+    data = report_data(result, rec, truth, command, unit_id, verdict)
     json_path, md_path = companion_paths(table_path)
     text = report_markdown(data)
     files = {json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
              md_path: text.encode()}
+    plots = ({"velocity in the static intervals after calibration": residual_plot(result, rec),
+              "Allan deviation of the static data against the noise model": noise_plot(result, rec)}
+             if report_dir is not None or certificate else {})
+    if certificate:
+        files[certificate_path(table_path)] = certificate_html(data, plots).encode()
     if report_dir is not None:
         out = Path(report_dir)
         stem = f"{rec.file_stem}-{result.solver}"
         files[out / f"{stem}-report.md"] = text.encode()
         files[out / f"{stem}-report.json"] = files[json_path]
         files.update(calibration_tables(result, out / stem, rec.name, truth))
-        files[out / f"{stem}-residuals.png"] = residual_plot(result, rec)
-        files[out / f"{stem}-allan.png"] = noise_plot(result, rec)
+        residuals, allan = plots.values()
+        files[out / f"{stem}-residuals.png"] = residuals
+        files[out / f"{stem}-allan.png"] = allan
     return files
 
 

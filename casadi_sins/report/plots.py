@@ -32,6 +32,18 @@ def figure_bytes(fig) -> bytes:
     return buffer.getvalue()
 
 
+def legend_outside(ax, fontsize: float = 8) -> None:
+    """The legend of an axes outside the plots, never over the data: right of it when it is in the last column
+    of its figure, else below the whole figure in one row."""
+    spec = ax.get_subplotspec()
+    if spec is None or spec.is_last_col():
+        ax.legend(fontsize=fontsize, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+        return
+    handles, labels = ax.get_legend_handles_labels()
+    ax.figure.legend(handles, labels, fontsize=fontsize, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                     ncol=max(1, len(labels)), frameon=False)
+
+
 def save_figure(fig, path):
     """Save a matplotlib figure as PNG (atomically to a path, or into a binary file object) and close it."""
     data = figure_bytes(fig)
@@ -59,7 +71,7 @@ def plot_navigation(rec: Recording, runs: dict[str, list[GroupNavigation]], path
         axes[row, 0].set_ylabel("m/s")
     for col in range(3):
         axes[-1, col].set_xlabel("time (s)")
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle(f"{rec.name}: navigated velocity (grey: rotations)")
     return save_figure(fig, path)
 
@@ -98,7 +110,7 @@ def plot_residuals(rec: Recording, residuals: dict[str, dict], path: str | Path)
     for axis, label in enumerate("ENU"):
         axes[axis].set_ylabel(f"v_{label} (mm/s)")
     axes[-1].set_xlabel("time within the static intervals, laid side by side (s)")
-    axes[0].legend(fontsize=8, loc="upper right")
+    legend_outside(axes[0], fontsize=8)
     fig.suptitle(f"{rec.name}: velocity in each static interval after calibration (relative to its start)",
                  y=0.995)
     return save_figure(fig, path)
@@ -131,6 +143,6 @@ def noise_plot(result: CalibrationResult, rec: Recording) -> bytes:
         ax.set_xlabel("cluster time (s)")
         ax.set_ylabel(f"Allan deviation ({unit})")
         ax.grid(True, which="both", lw=0.3)
-        ax.legend(fontsize=7)
+        legend_outside(ax, fontsize=7)
     fig.suptitle(f"{rec.name}: Allan deviation of the static segments (calibrated), and the noise model")
     return figure_bytes(fig)

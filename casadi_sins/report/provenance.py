@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-import hashlib
 import json
 from pathlib import Path
 
 from ..core.errors import InputError
 from ..core.inputs import check_input_file
 from ..core.text import one_line
+from ..core.files import file_sha256
 from ..data.conditions import parse_date
 from .calibration import companion_paths
 
@@ -84,15 +84,6 @@ class Provenance:
         if not self.from_report:
             out["provenance"] = "no companion report beside the table: unit, date and recording unknown"
         return {k: v for k, v in out.items() if v is not None}
-
-
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 of a file's bytes."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def read_provenance(table_path: str | Path) -> Provenance:

@@ -63,3 +63,54 @@ def rounded(frame: pd.DataFrame, pairs: dict[str, str], signed: bool = False) ->
         if sig in out:
             out[sig] = [format_sigma(s) for s in frame[sig]]
     return out
+
+
+def parameter_display(data: dict) -> pd.DataFrame:
+    """The report's parameters as people read them: natural units, each value (and error) rounded to the
+    second significant digit of its sigma, the sigma to two digits (text columns)."""
+    frame = pd.DataFrame(data["parameters"])
+    cols = ["parameter", "value_natural", "value_unit", "sigma_natural", "sigma_unit"]
+    cols += [c for c in ("error_natural", "error_over_sigma") if c in frame]
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
+                       zip(frame["parameter"], frame["value_natural"], frame["sigma_natural"])]
+    shown = rounded(frame, {"value_natural": "_sigma", "error_natural": "sigma_natural"})  # from the sigma
+    if "error_over_sigma" in shown:
+        shown["error_over_sigma"] = [f"{x:+.2f}" if isinstance(x, (int, float)) and math.isfinite(x) else ""
+                                     for x in frame["error_over_sigma"]]
+    return shown[cols]
+
+
+def significant(x, digits: int = 2) -> str:
+    """A number without a sigma of its own (an uncertainty, an RMS, an error realisation) to ``digits``
+    significant digits, in the form :func:`format_sigma` gives (signed when negative)."""
+    if x is None or isinstance(x, str):
+        return "" if x is None else x
+    x = float(x)
+    if not math.isfinite(x):
+        return ""
+    text = format_sigma(abs(x), digits) if x != 0 else "0"
+    return f"-{text}" if x < 0 else text
+
+
+def display(frame: pd.DataFrame, pairs: dict[str, str] | None = None, sigmas=(), ratios=(),
+            signed: bool = False) -> pd.DataFrame:
+    """The one display rule of every table people read (Markdown, terminal); the numbers as text.
+
+    Each value column of ``pairs`` is rounded to the second significant digit of its sigma column
+    (:func:`rounded`); the columns of ``sigmas`` (sigmas, RMS, errors without a sigma of their own) get
+    two significant digits, those of ``ratios`` (error/sigma, z, RMS/sigma) two decimals.  Columns not
+    named are left as they are.
+    """
+    out = rounded(frame, pairs or {}, signed)
+    for col in sigmas:
+        if col in frame:
+            out[col] = [significant(x) for x in frame[col]]
+    for col in ratios:
+        if col in frame:
+            out[col] = [f"{x:.2f}" if isinstance(x, (int, float)) and math.isfinite(x) else "" for x in frame[col]]
+    return out
+
+
+def float_columns(frame: pd.DataFrame) -> list[str]:
+    """The columns of floating-point numbers of a frame."""
+    return [c for c in frame.columns if pd.api.types.is_float_dtype(frame[c])]

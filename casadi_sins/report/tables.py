@@ -13,7 +13,7 @@ from ..core.text import markdown_text, one_line
 from ..core.units import UG
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
-from ..model.parameters import ParameterSet, natural_errors
+from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import group_of, natural_value_of
 from .rounding import format_sigma, format_with_sigma, rounded, sigma_in_value_unit
 from ..nav.navigation import GroupNavigation, static_velocities
@@ -57,9 +57,10 @@ def frame_files(frame: pd.DataFrame, stem: str | Path, title: str | None = None,
             stem.with_name(stem.name + ".md"): md.encode()}
 
 
-def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g") -> None:
-    """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically)."""
-    write_files(frame_files(frame, stem, title, float_format))
+def write_frame(frame: pd.DataFrame, stem: str | Path, title: str | None = None, float_format: str = "%.6g",
+                display: pd.DataFrame | None = None) -> None:
+    """Write a DataFrame as ``stem.csv`` and ``stem.md`` (atomically; the Markdown from ``display`` when given)."""
+    write_files(frame_files(frame, stem, title, float_format, display))
 
 
 def markdown_table(frame: pd.DataFrame, float_format: str = "%.6g") -> str:
@@ -82,8 +83,8 @@ def parameter_report(result, truth: ParameterSet | None = None) -> pd.DataFrame:
     frame = pd.DataFrame({"parameter": params.names, "unit": params.units, "value": params.values,
                           "natural unit": params.natural_units, "sigma (natural)": params.natural_sigma()})
     if truth is not None:
-        err = natural_errors(params, truth)
-        frame["truth"] = truth.aligned(params.names)
+        err = truth_errors(params, truth)
+        frame["truth"] = [truth[n] if n in truth.names else np.nan for n in params.names]
         frame["error (natural)"] = err
         frame["error/sigma"] = err / frame["sigma (natural)"]
     return frame
@@ -119,7 +120,7 @@ def natural_table(frame):
                         "sigma unit": frame["natural unit"]})
     if "error (natural)" in frame:
         out["error"] = [format_with_sigma(e, s, signed=True) for e, s in zip(frame["error (natural)"], sigma)]
-        out["error/sigma"] = [f"{e:+.2f}" for e in frame["error/sigma"]]
+        out["error/sigma"] = [f"{e:+.2f}" if np.isfinite(e) else "" for e in frame["error/sigma"]]
     return out
 
 

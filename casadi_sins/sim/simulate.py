@@ -52,8 +52,9 @@ _QUADRATURE_CHUNK = 20000
 
 
 def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_rate: np.ndarray, gravity: float,
-                    sway: Sway | None = None):
-    """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1.
+                    sway: Sway | None = None, progress=None):
+    """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1; ``progress(fraction)``,
+    if given, after each piece of motion with the fraction of the experiment's time done.
 
     Without sway a static piece is integrated in closed form; everything else by 6-point
     Gauss-Legendre quadrature on each sample's part of the piece (the integrands are analytic
@@ -91,6 +92,8 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
                       else np.outer(piece.angle_at(b) - piece.angle_at(a), piece.axis))
             np.add.at(dtheta, sample, integral[:, :, 0] + turned)
             np.add.at(dv, sample, integral[:, :, 1])
+        if progress:
+            progress(min(piece.t1 / edges[-1], 1.0))
     return dtheta, dv
 
 
@@ -125,8 +128,9 @@ def quantize(pulses: np.ndarray) -> np.ndarray:
     return np.diff(counts, axis=0, prepend=np.zeros((1, pulses.shape[1])))
 
 
-def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: str | None = None) -> Simulation:
-    """Simulate the problem's experiment.
+def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: str | None = None,
+             progress=None) -> Simulation:
+    """Simulate the problem's experiment (``progress(fraction)``, if given, as the motion is integrated).
 
     Parameters
     ----------
@@ -146,7 +150,7 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     duration = pieces[-1].t1
     n_samples = int(round(duration * problem.rate_hz))
     g = problem.site.g
-    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway)
+    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway, progress)
     truth = problem.truth
     # what the extra groups add to K_g dtheta and K_a dv in the output model
     gyro_extra, accel_extra = np.zeros_like(dtheta), np.zeros_like(dv)

@@ -32,6 +32,7 @@ from ..data.recording import Recording
 from ..data.samples import samples_csv
 from ..model.output import compensate_table
 from ..model.parameters import ParameterSet
+from ..report.rounding import display
 from ..report.tables import frame_files
 
 #: The columns of the check, natural units.
@@ -94,6 +95,15 @@ def apply_table(rec: Recording, params: ParameterSet) -> Applied:
     return Applied(compensated, static_check(compensated), notes)
 
 
+def check_display(check: pd.DataFrame) -> pd.DataFrame:
+    """The check as people read it: each error rounded to the noise of its mean, the noise to two digits."""
+    pairs = {c: c.replace("_error", "_noise") for c in CHECK_COLUMNS if "error" in c and c.replace("_error", "_noise")
+             in check}
+    pairs.update({c: "earth_rate_noise_deg_h" for c in CHECK_COLUMNS if c.startswith("earth_rate_") and "error" in c
+                  and c not in pairs})
+    return display(check, pairs, signed=True)
+
+
 def apply_files(applied: Applied, out_dir: str | Path, table_label: str, table_sha256: str | None = None
                 ) -> dict[Path, bytes]:
     """The compensated recording (``NAME-compensated.toml`` and ``.csv``) and its check (``-check.csv/.md``)
@@ -111,5 +121,5 @@ def apply_files(applied: Applied, out_dir: str | Path, table_label: str, table_s
     title = (f"{rec.name}: static segments after compensation with {table_label}; worst |gravity error| "
              f"{worst.get('gravity_error_ug', math.nan):.3g} ug, |Earth-rate error| "
              f"{worst.get('earth_rate_error_deg_h', math.nan):.3g} deg/h")
-    files.update(frame_files(applied.check, out / f"{stem}-check", title, float_format="%.4g"))
+    files.update(frame_files(applied.check, out / f"{stem}-check", title, display=check_display(applied.check)))
     return files

@@ -33,18 +33,23 @@ import pandas as pd
 from ..calibrate import calibrate
 from ..core.errors import InputError
 from ..core.files import safe_stem, write_files
-from ..core.text import one_line
+from ..core.text import one_line, plural
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import table_text
-from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, relative_mask
-from ..report.calibration import companion_paths, recording_hash, report_files
+from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
+from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
+from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
+from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
 
 #: Outlier threshold in robust spreads (see the module docstring).
 OUTLIER_THRESHOLD = 5.0
+#: The columns of the spread table.
+SPREAD_COLUMNS = ("parameter", "unit", "units", "median (SI)", "robust spread", "std", "min", "max",
+                  "median unit sigma", "outliers")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,6 +59,8 @@ class BatchOptions:
     solver: str = "nlp"
     model: str = "21"
     noise: str | None = None
+    tolerance: str | None = None  # a tolerance sheet with acceptance limits: each unit's verdict
+    certificate: bool = False  # each unit's NAME.certificate.html
 
 
 def unit_table_path(out_dir, rec_path) -> Path:
@@ -86,7 +93,8 @@ def row_from_report(data: dict, rec_path, status: str) -> dict:
     conditions = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
     row = {"unit_id": data.get("unit_id") or conditions.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
            "status": status if not warnings or status != "ok" else "warnings", "warnings": len(warnings),
-           "message": " | ".join(warnings), "wall_time_s": data.get("wall_time_s", math.nan)}
+           "message": " | ".join(warnings), "wall_time_s": data.get("wall_time_s", math.nan),
+           "verdict": data.get("verdict", "")}
     for key, column in (("date", "recorded"), ("temperature_c", "temperature_c"), ("operator", "operator"),
                         ("bench", "bench")):
         if conditions.get(key) is not None:
@@ -102,10 +110,13 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
     try:
         rec = refine(read_recording(rec_path))
         noise = read_datasheet(options.noise) if options.noise else None
+        sheet = read_acceptance_sheet(options.tolerance) if options.tolerance else None
         result = calibrate(rec, solver=options.solver, noise=noise, model=options.model)
+        verdict = judge(result.parameters, sheet) if sheet else None
         table = unit_table_path(out_dir, rec_path)
-        files = {table: table_text(result.parameters).encode()}
-        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name))
+        files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}
+        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name, verdict=verdict,
+                                  certificate=options.certificate))
         data = json.loads(files[companion_paths(table)[0]])
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
@@ -113,7 +124,25 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         if not hasattr(exc, "path") and type(exc).__name__ not in ("CalibrationError",):
             message = f"{type(exc).__name__}: {message}"
         return {"row": {"unit_id": Path(rec_path).stem, "recording": str(rec_path), "status": "failed",
-                        "warnings": 0, "message": message}, "files": {}}
+                        "warnings": 0, "message": message, "verdict": ""}, "files": {}}
+
+
+def unit_files(out_dir, rec_path) -> list[Path]:
+    """Every file a unit's calibration writes under ``OUT/units/`` (table, report, certificate)."""
+    table = unit_table_path(out_dir, rec_path)
+    return [table, *companion_paths(table), certificate_path(table)]
+
+
+def remove_stale(out_dir, rec_path) -> None:
+    """Remove a unit's files left by an earlier run (its calibration failed now: no stale table beside it)."""
+    for path in unit_files(out_dir, rec_path):
+        path.unlink(missing_ok=True)
+
+
+def same_sheet(data: dict, options: BatchOptions) -> bool:
+    """Whether a finished unit's report was judged against the sheet of this batch (or neither was judged)."""
+    judged = (data.get("acceptance") or {}).get("sheet_sha256")
+    return judged == (sheet_sha256(options.tolerance) if options.tolerance else None)
 
 
 def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOptions(), workers: int | None = None,
@@ -139,7 +168,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
     pending = []
     for path in paths:
         data = finished(path, out_dir) if resume else None
-        if data is None:
+        if data is None or not same_sheet(data, options):
             pending.append(path)
         else:
             rows[path] = {**row_from_report(data, path, "ok"), "resumed": True}
@@ -151,6 +180,8 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
         nonlocal done
         if result["files"]:
             write_files(result["files"])
+        else:
+            remove_stale(out_dir, result["row"]["recording"])
         rows[result["row"]["recording"]] = {**result["row"], "resumed": False}
         done += 1
         if progress:
@@ -185,7 +216,7 @@ def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> p
                      if len(values) > 1 else math.nan, "min": float(natural.min()) if len(values) else math.nan,
                      "max": float(natural.max()) if len(values) else math.nan, "median unit sigma": unit_sigma,
                      "outliers": " ".join(map(str, outliers))})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=SPREAD_COLUMNS)  # the columns even when no unit calibrated
 
 
 def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
@@ -199,17 +230,35 @@ def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def spread_display(spread: pd.DataFrame) -> pd.DataFrame:
+    """The spread table as people read it: the median in the report's value units, rounded like every spread
+    column to the median sigma of one unit; the spreads and that sigma to two significant digits."""
+    frame = spread.copy()
+    natural = [natural_value_of(n, v) for n, v in zip(frame["parameter"], frame["median (SI)"])]
+    frame.insert(3, "median", [v for v, _ in natural])
+    frame.insert(4, "value unit", [u for _, u in natural])
+    frame["_sigma"] = [sigma_in_value_unit(n, v, s) for n, (v, _), s in
+                       zip(frame["parameter"], natural, frame["median unit sigma"])]
+    shown = display(frame, {"median": "_sigma", "min": "median unit sigma", "max": "median unit sigma"},
+                    sigmas=["robust spread", "std", "median unit sigma"], signed=False)
+    return shown.drop(columns=["median (SI)", "_sigma"]).rename(columns={"unit": "spread unit"})
+
+
 def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path, bytes]:
     """``fleet.csv`` (every value and sigma, full precision), ``fleet.md`` (status per unit) and
     ``fleet-spread.csv/.md``."""
     out = Path(out_dir)
     failed = int((fleet["status"] == "failed").sum())
-    files = frame_files(fleet, out / "fleet", f"{len(fleet)} units, {failed} failed")
-    summary = fleet[[c for c in ("unit_id", "status", "warnings", "outliers", "recorded", "temperature_c", "message",
-                                     "resumed") if c in fleet]]
-    files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {len(fleet)} units, {failed} failed; "
-                                          "values and sigma of every parameter in fleet.csv")[out / "fleet.md"]
+    rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
+    counts = (f"{plural(len(fleet), 'unit')}, {failed} failed"
+              + (f", {rejected} out of tolerance" if "verdict" in fleet and fleet["verdict"].any() else ""))
+    files = frame_files(fleet, out / "fleet", counts)
+    summary = fleet[[c for c in ("unit_id", "status", "verdict", "warnings", "outliers", "recorded",
+                                     "temperature_c", "message", "resumed")
+                     if c in fleet]]
+    files[out / "fleet.md"] = frame_files(summary, out / "fleet", f"fleet: {counts}; values and sigma of every "
+                                          "parameter in fleet.csv")[out / "fleet.md"]
     files.update(frame_files(spread, out / "fleet-spread", "spread of each parameter across the units (natural "
                              f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
-                             "max(robust spread, median unit sigma)", "%.4g"))
+                             "max(robust spread, median unit sigma)", display=spread_display(spread)))
     return files

@@ -34,7 +34,8 @@ from ..model.output import rest_sensitivity
 from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_mask
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
+from ..report.rounding import display, float_columns
 from ..report.tables import write_frame
 
 # error state: phi (3), dv_E, dv_N, dL, dlon, then the parameter errors (the 21, then any extra groups)
@@ -230,7 +231,7 @@ def plot_budget(budget: Budget, path: str | Path, title: str) -> Path:
         ax.set_xlabel("time (h)")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("m")
-    axes[1].legend(fontsize=8, loc="lower right")
+    legend_outside(axes[1], fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
     return save_figure(fig, path)
@@ -240,7 +241,8 @@ def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame
     """The budget's table at 1 h and 24 h (CSV, Markdown) and its plot; returns the table."""
     table = budget.table([3600.0, 86400.0])
     write_frame(table, Path(out_dir) / f"{name}-budget",
-                f"{name}: static navigation error by source after calibration (1 sigma, m)")
+                f"{name}: static navigation error by source after calibration (1 sigma, m)",
+                display=display(table, sigmas=float_columns(table)))
     plot_budget(budget, Path(out_dir) / f"{name}-budget.png", f"{name}: error budget of static navigation")
     return table
 

@@ -13,9 +13,10 @@ from ..calibrate import calibrate
 from ..calibrate.result import CalibrationResult
 from ..data.recording import Recording
 from ..data.tables import table_text
-from ..model.parameters import ParameterSet, natural_errors
-from ..model.registry import natural_unit_of, unit_of
+from ..model.parameters import ParameterSet, natural_errors, truth_errors
+from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..report.plots import plot_residuals, static_residuals
+from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 
 
@@ -43,7 +44,7 @@ def comparison_table(results: dict[str, CalibrationResult], truth: ParameterSet 
     if truth is not None:
         frame["truth"] = truth.aligned(rows)
         for name in names:
-            err = column(results[name], natural_errors(results[name].parameters, truth))
+            err = column(results[name], truth_errors(results[name].parameters, truth))
             frame[f"{name} error (natural)"] = err
             frame[f"{name} error/sigma"] = err / frame[f"{name} sigma (natural)"]
     return frame
@@ -60,6 +61,44 @@ def summary_table(rec: Recording, results: dict[str, CalibrationResult],
                      "static velocity rms (mm/s)": 1e3 * float(np.sqrt(np.mean(velocities**2))),
                      "sigma means": res.sigma_meaning})
     return pd.DataFrame(rows)
+
+
+def comparison_display(table: pd.DataFrame) -> pd.DataFrame:
+    """The comparison as people read it: each solver's value in the report's value units (ug, deg/h, arcsec;
+    pulse weights) rounded to its sigma, sigmas to two digits, each error rounded to its solver's sigma and the
+    difference to the smaller sigma, error/sigma to two decimals; natural units labelled."""
+    solvers = [c[: -len(" value")] for c in table.columns if c.endswith(" value")]
+    frame = table[["parameter"]].copy()
+    frame["value unit"] = [natural_value_of(n, 1.0)[1] for n in table["parameter"]]
+    frame["natural unit"] = table["natural unit"]
+    pairs, sigmas, ratios = {}, [], []
+    for name in solvers:
+        natural = [natural_value_of(n, v)[0] for n, v in zip(table["parameter"], table[f"{name} value"])]
+        frame[f"{name} value"] = natural
+        frame[f"_{name} sigma"] = [sigma_in_value_unit(n, v, s) for n, v, s in
+                                   zip(table["parameter"], natural, table[f"{name} sigma (natural)"])]
+        frame[f"{name} sigma (natural)"] = table[f"{name} sigma (natural)"]
+        pairs[f"{name} value"] = f"_{name} sigma"
+        sigmas.append(f"{name} sigma (natural)")
+    smallest = table[[f"{n} sigma (natural)" for n in solvers]].min(axis=1)
+    frame["_smallest"] = smallest
+    for col in table.columns:
+        if col.endswith("(natural)") and ("error" in col or " - " in col):
+            frame[col] = table[col]
+            own = col.replace(" error (natural)", " sigma (natural)")
+            pairs[col] = own if own in frame and own != col else "_smallest"
+        elif col.endswith("error/sigma"):
+            frame[col] = table[col]
+            ratios.append(col)
+    shown = display(frame, pairs, sigmas, ratios)
+    return shown[[c for c in shown.columns if not c.startswith("_")]]
+
+
+def summary_display(summary: pd.DataFrame) -> pd.DataFrame:
+    """The solvers' summary as people read it: timings to 0.01 s, residuals to two significant digits."""
+    out = display(summary, sigmas=["own residual rms (whitened)", "static velocity rms (mm/s)"])
+    out["wall time (s)"] = [f"{x:.2f}" for x in summary["wall time (s)"]]
+    return out
 
 
 @dataclasses.dataclass
@@ -86,8 +125,10 @@ def comparison_files(rec: Recording, comparison: Comparison, out_dir: str | Path
     out_dir = Path(out_dir)
     stem = out_dir / f"{rec.file_stem}-compare"
     files = frame_files(comparison.table, stem,
-                        f"{rec.name}: NLP and ILS side by side (natural units: ug, ppm, arcsec, deg/h)")
-    files.update(frame_files(comparison.summary, out_dir / f"{rec.file_stem}-compare-summary", f"{rec.name}: solvers"))
+                        f"{rec.name}: NLP and ILS side by side (natural units: ug, ppm, arcsec, deg/h; values rounded "
+                        "to their sigma, full precision in the CSV)", display=comparison_display(comparison.table))
+    files.update(frame_files(comparison.summary, out_dir / f"{rec.file_stem}-compare-summary", f"{rec.name}: solvers",
+                             display=summary_display(comparison.summary)))
     plot = io.BytesIO()
     plot_residuals(rec, comparison.residuals, plot)
     files[out_dir / f"{rec.file_stem}-compare-residuals.png"] = plot.getvalue()

@@ -31,7 +31,7 @@ from ..data.tables import read_table
 from ..data.tolerance import ToleranceSheet
 from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import GROUPS, natural_unit_of
-from ..report.plots import figure_bytes, pyplot
+from ..report.plots import legend_outside, figure_bytes, pyplot
 from ..report.provenance import Provenance, read_provenance
 from ..report.rounding import rounded
 from ..report.tables import frame_files
@@ -217,7 +217,7 @@ def plot_group(cals: list[Calibration], group_key: str) -> bytes:
     ax.axhline(0.0, color="k", lw=0.6)
     ax.set_ylabel(f"change since the first calibration ({group.natural_unit})")
     ax.set_title(f"{group.label}: {len(cals)} calibrations, 1-sigma bars")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     fig.autofmt_xdate()
     return figure_bytes(fig)
 

@@ -15,7 +15,7 @@ from ..data.problem import Problem
 from ..model.noise import SensorNoise
 from ..model.parameters import joint_chi_square, natural_errors
 from ..model.registry import CORE_SPANS, NAMES, group_of
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..sim import simulate
 from .parallel import run_all
 
@@ -128,7 +128,7 @@ def plot_summary(summary_frame: pd.DataFrame, path) -> object:
         ax.set_xticks(x + width * len(solvers) / 2, [n.split("_", 2)[-1] for n in names])
         ax.set_title(f"{label} ({unit})", fontsize=10)
         ax.set_ylim(bottom=0)
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle("Monte Carlo: RMS error per parameter against the predicted sigma")
     fig.tight_layout()
     return save_figure(fig, path)
@@ -165,7 +165,8 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
     stem = out / f"{problem.name}-montecarlo"
     files = frame_files(rows, out / f"{problem.name}-montecarlo-runs")
     files.update(frame_files(summary_frame[SUMMARY_COLUMNS], stem, f"{problem.name}: {runs} runs in {elapsed:.0f} s; "
-                             "RMS error against the solver's sigma and the predicted sigma (natural units)"))
+                             "RMS error against the solver's sigma and the predicted sigma (natural units)",
+                             display=summary_display(summary_frame)))
     import io
 
     plot = io.BytesIO()
@@ -177,3 +178,12 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
 #: The columns of the Monte Carlo summary shown to the user.
 SUMMARY_COLUMNS = ["solver", "parameter", "unit", "rms_error", "mean_sigma", "predicted_sigma", "rms_over_predicted",
                    "rms_over_sigma", "max_abs_z", "runs"]
+
+
+def summary_display(summary_frame: pd.DataFrame) -> pd.DataFrame:
+    """The summary as people read it (Markdown, terminal): RMS and sigmas to two significant digits in
+    natural units, the ratios to two decimals."""
+    from ..report.rounding import display
+
+    return display(summary_frame[SUMMARY_COLUMNS], sigmas=["rms_error", "mean_sigma", "predicted_sigma"],
+                   ratios=["rms_over_predicted", "rms_over_sigma", "max_abs_z"])

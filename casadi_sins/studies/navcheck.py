@@ -17,7 +17,8 @@ import pandas as pd
 from ..calibrate.initial import rough_parameters
 from ..data.problem import GroupPlan, Problem, Timing
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
+from ..report.rounding import display, float_columns
 from ..report.tables import write_frame
 from ..sim import simulate
 
@@ -56,7 +57,7 @@ def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: st
     ax.axhline(1.0, color="k", ls=":", lw=0.8, label="1 nmile")
     ax.set_xlabel("time of free-inertial navigation (min)")
     ax.set_ylabel("horizontal position error (nmile)")
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.set_title(title)
     return save_figure(fig, path)
 
@@ -64,6 +65,7 @@ def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: st
 def write_navigation_check(runs, table: pd.DataFrame, out_dir: str | Path, name: str) -> None:
     """The check's table (CSV, Markdown) and plot."""
     out_dir = Path(out_dir)
-    write_frame(table, out_dir / f"{name}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration")
+    write_frame(table, out_dir / f"{name}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration",
+                display=display(table, sigmas=float_columns(table)))
     plot_navigation_check(runs, out_dir / f"{name}-navcheck.png",
                           f"{name}: horizontal position error, static base, after alignment")

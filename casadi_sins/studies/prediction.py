@@ -20,7 +20,7 @@ from ..calibrate.nlp.graph import build_graph, variable_scale
 from ..calibrate.nlp.selection import model_groups
 from ..calibrate.steps import default_observation_spacing
 from ..core.toml import read_toml
-from ..core.units import DEG_PER_H, UG
+from ..core.units import ARW_UNIT, VRW_UNIT
 from ..data.description import read_recording
 from ..data.problem import Problem, load_problem
 from ..data.recording import Recording
@@ -30,7 +30,8 @@ from ..model.parameters import ParameterSet
 from ..model.registry import ACCEL_SCALE, CORE_SPANS, GYRO_SCALE, GROUPS, N_PARAMS, NAMES, group_of, groups_in, model_names, natural_unit_of
 from ..noise.kalman import NoiseSystem
 from ..noise.plan import plan_noise
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
+from ..report.rounding import display
 from ..report.tables import write_frame
 from ..sim import simulate
 
@@ -107,31 +108,31 @@ def predict_problem(problem: Problem, model="21") -> Prediction:
     return predict(sim.recording, problem.truth, noise, name=problem.name, model=model)
 
 
-def predict_file(path: str | Path, accel_noise_ug: float | None = None, gyro_noise_deg_h: float | None = None,
+def predict_file(path: str | Path, accel_vrw_ug_rthz: float | None = None, gyro_arw_deg_rth: float | None = None,
                  noise: SensorNoise | None = None, model="21") -> Prediction:
     """Predicted accuracy for a problem file or a recording (TOML), told apart by their ``format``.
 
     A problem states its noise; for a recording the noise is measured in its raw data (``noise``, a
-    datasheet, overrides); ``accel_noise_ug`` / ``gyro_noise_deg_h`` (white, per sample) override both.
+    datasheet, overrides); ``accel_vrw_ug_rthz`` (ug/sqrt(Hz)) / ``gyro_arw_deg_rth`` (deg/sqrt(h)), the
+    white noise densities of a datasheet, override both.
     """
     path = Path(path)
     fmt = str(read_toml(path, "problem file or recording description").get("format", ""))
     if fmt.startswith("casadi-sins-problem"):
         problem = load_problem(path)
-        changes = {k: v for k, v in (("accel_noise_ug", accel_noise_ug), ("gyro_noise_deg_h", gyro_noise_deg_h))
-                   if v is not None}
-        if changes:  # the stated white noise replaces the problem's densities too
-            changes.setdefault("accel_noise_ug", problem.deviations.accel_noise_ug)
-            changes.setdefault("gyro_noise_deg_h", problem.deviations.gyro_noise_deg_h)
-            changes.update(accel_vrw_ug_rthz=0.0, gyro_arw_deg_rth=0.0)
+        changes = {}
+        if accel_vrw_ug_rthz is not None:  # the stated density replaces the problem's white noise
+            changes.update(accel_vrw_ug_rthz=accel_vrw_ug_rthz, accel_noise_ug=0.0)
+        if gyro_arw_deg_rth is not None:
+            changes.update(gyro_arw_deg_rth=gyro_arw_deg_rth, gyro_noise_deg_h=0.0)
         return predict_problem(problem.with_changes(**changes) if changes else problem, model)
     rec = read_recording(path)
     nominal = rough_parameters(rec).values
     model_noise = plan_noise(rec, nominal, noise).model
-    if accel_noise_ug is not None:
-        model_noise.accel_vrw = np.full(3, accel_noise_ug * UG * np.sqrt(rec.dt))
-    if gyro_noise_deg_h is not None:
-        model_noise.gyro_arw = np.full(3, gyro_noise_deg_h * DEG_PER_H * np.sqrt(rec.dt))
+    if accel_vrw_ug_rthz is not None:
+        model_noise.accel_vrw = np.full(3, accel_vrw_ug_rthz * VRW_UNIT)
+    if gyro_arw_deg_rth is not None:
+        model_noise.gyro_arw = np.full(3, gyro_arw_deg_rth * ARW_UNIT)
     return predict(rec, nominal, model_noise, model=model)
 
 
@@ -173,10 +174,15 @@ def plot_predictions(predictions: list[Prediction], path: str | Path) -> Path:
         ax.set_xticks(x + width * (len(predictions) - 1) / 2, names)
         ax.set_title(f"{label} ({unit}, 1 sigma)", fontsize=10)
         ax.set_ylim(bottom=0)
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle("Predicted accuracy of each schedule (covariance of the NLP's linearisation)")
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def analysis_display(table: pd.DataFrame) -> pd.DataFrame:
+    """The schedules' predicted sigmas as people read them: two significant digits, natural units."""
+    return display(table, sigmas=[c for c in table.columns if c.endswith(" sigma")])
 
 
 def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.DataFrame:
@@ -184,11 +190,14 @@ def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.Dat
     out_dir = Path(out_dir)
     for pred in predictions:
         write_table(out_dir / f"{pred.name}-predicted.csv", pred.nominal)
-        write_frame(pred.frame(), out_dir / f"{pred.name}-predicted-natural",
-                    f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}")
+        frame = pred.frame()
+        write_frame(frame, out_dir / f"{pred.name}-predicted-natural",
+                    f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}",
+                    display=display(frame, {"value": "sigma"}, sigmas=["sigma (natural)"]))
     table = comparison_frame(predictions)
     if len(predictions) > 1:
-        write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)")
+        write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)",
+                    display=analysis_display(table))
     plot_predictions(predictions, out_dir / ("schedules-predicted.png" if len(predictions) > 1
                                              else f"{predictions[0].name}-predicted.png"))
     return table

@@ -10,7 +10,7 @@ import pandas as pd
 
 from ..data.problem import Problem
 from ..model.registry import CORE_SPANS
-from ..report.plots import pyplot, save_figure
+from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.tables import write_frame
 from . import montecarlo as MC
 
@@ -61,7 +61,7 @@ def plot_sweep(table: pd.DataFrame, path: str | Path) -> Path:
         ax.set_title(f"{group} ({sub['unit'].iloc[0]})", fontsize=10)
         ax.set_xlabel("start attitude error (deg)")
         ax.set_xscale("log")
-    axes[0, 0].legend(fontsize=8)
+    legend_outside(axes[0, 0], fontsize=8)
     fig.suptitle("RMS error against the start attitude error")
     fig.tight_layout()
     return save_figure(fig, path)

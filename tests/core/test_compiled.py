@@ -112,3 +112,26 @@ def test_both_solvers_give_the_same_results_compiled_and_on_the_virtual_machine(
         sigma = np.asarray(sigma_c)
         assert np.max(np.abs(np.subtract(values_c, values_v)) / sigma) < 1e-6, solver
         assert np.max(np.abs(np.subtract(sigma_c, sigma_v)) / sigma) < 1e-6, solver
+
+
+def test_no_compile_says_so_in_one_line(monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv("CASADI_SINS_CACHE", str(tmp_path))
+    monkeypatch.setenv("CASADI_SINS_NO_COMPILE", "1")
+    monkeypatch.setattr(compiled, "_NOTES", set())
+    for key in ("a", "b"):
+        assert compiled.cached_functions("toy", key, ["toy_step"], lambda: [_step()])[0].class_name() == "SXFunction"
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "CASADI_SINS_NO_COMPILE" in err[0]
+
+
+def test_a_failing_compiler_is_named_with_its_status(monkeypatch, tmp_path, capsys):
+    fake = tmp_path / "cc"
+    fake.write_text("#!/bin/sh\nexit 4\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("CASADI_SINS_CACHE", str(tmp_path / "cache"))
+    monkeypatch.delenv("CASADI_SINS_NO_COMPILE", raising=False)
+    monkeypatch.setattr(compiled, "find_compiler", lambda: str(fake))
+    monkeypatch.setattr(compiled, "_NOTES", set())
+    assert compiled.cached_functions("toy", "k", ["toy_step"], lambda: [_step()])[0].class_name() == "SXFunction"
+    err = capsys.readouterr().err
+    assert "exit status 4, no message" in err and "()" not in err

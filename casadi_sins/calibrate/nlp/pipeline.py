@@ -282,8 +282,7 @@ def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
     record(run.noise_plan, run.wander)
     message = describe(run.wander)
     if message:
-        run.warnings.append(message)
-        run.say(f"warning: {message}")
+        run.warnings.append(message)  # shown once with the result's warnings (the CLI's WARNING lines)
     return fit
 
 
@@ -304,12 +303,17 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, unmodelled, fit.z, fit.use_rotation_steps,
                                     run.progress, update_free=False)
     fit.ipopt_stats = stats
-    failed = [f"{c.name} {c.value:.3g} (limit {c.limit:.3g})" for c in assessment.checks if not c.passed]
+    first = [c for c in assessment.checks if not c.passed and c.value > c.limit]  # beyond (not below) the model
     assessment = assess(graph, fit, run.noise_plan)
+    final = {c.name: c for c in assessment.checks}
+    failed = [f"{c.name} {c.value:.3g} against the limit {c.limit:.3g}" + (
+        f", now {final[c.name].value:.3g} ({'passed' if final[c.name].passed else 'still failed'})"
+        if c.name in final else "") for c in first]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
     run.warnings += unmodelled_at_bounds(unmodelled)
-    run.warnings.append(f"the residuals exceeded the sensor noise ({'; '.join(failed)}): errors outside the model "
+    run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
+                        "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
                         f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "
                         f"mean{step}; sigma includes them")
@@ -340,9 +344,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     separation_checks, separation_text = separation_warnings(params, run.wander, remedy)
     assessment.checks += separation_checks
     assessment.warnings += separation_text
-    warnings = run.warnings + run.noise_plan.warnings + assessment.warnings
-    for message in assessment.warnings:
-        run.say(f"warning: {message}")
+    warnings = run.warnings + run.noise_plan.warnings + assessment.warnings  # shown once, with the result
     stats = fit.ipopt_stats
     details = NlpDetails(stats["return_status"], int(stats["iter_count"]), fit.gls_steps, fit.use_rotation_steps,
                          fit.rotation_step_ratio, offsets, start_attitudes, groups_in(names), run.selection,

@@ -38,7 +38,7 @@ from .timedomain import draw_errors, navigate
 
 def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs: int = 50, seed: int = 0,
                 turn_step_deg: float = 1.0, dwell_step_s: float = 5.0, max_step_s: float = 60.0,
-                matched: bool = True) -> dict:
+                matched: bool = True, progress=None) -> dict:
     """Per source group: the MC's RMS against the covariance (see the module docstring).
 
     Parameters
@@ -56,6 +56,8 @@ def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs
         Largest output interval in a dwell, s.
     matched : bool
         Moment-matched draws of the constants (default) or plain ones.
+    progress : callable, optional
+        ``progress(fraction)`` as the navigation advances.
 
     Returns
     -------
@@ -66,7 +68,7 @@ def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs
     prop = propagate(scheme, site, hours, sources.gyro_arw, sources.accel_vrw, max_step_s=max_step_s)
     errors, labels = draw_errors(sources, runs, rng, matched)
     start = time.perf_counter()
-    t, err, ref = navigate(scheme, site, hours, errors, rng, turn_step_deg, dwell_step_s, max_step_s)
+    t, err, ref = navigate(scheme, site, hours, errors, rng, turn_step_deg, dwell_step_s, max_step_s, progress)
     nav_s = time.perf_counter() - start
     if not np.allclose(prop.time, t):
         raise RuntimeError("the navigation and the covariance disagree on the output times")
@@ -118,7 +120,13 @@ def run_schemes(schemes: list[Scheme], sources: Sources, site: Site, hours: floa
     (:meth:`Sources.aligned`) plus the sheet's; ``options`` go to :func:`monte_carlo`.
     """
     items = [(s, sources.aligned(site, s.start) if aligned else sources, site, hours, options) for s in schemes]
-    results = list(run_all(_task, items, workers=workers, progress=progress))
+    if workers == 1 and progress:  # in this process: progress within each scheme's navigation
+        results = []
+        for k, item in enumerate(items):
+            *head, opts = item
+            results.append(_task((*head, {**opts, "progress": lambda f, k=k: progress(k + f, len(items))})))
+    else:
+        results = list(run_all(_task, items, workers=workers, progress=progress))
     order = {s.name: k for k, s in enumerate(schemes)}
     return sorted(results, key=lambda r: order[r["scheme"]])
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...core.files import safe_stem
 from ...core.text import markdown_text, one_line
-from ...report.plots import figure_bytes, pyplot
+from ...report.plots import legend_outside, figure_bytes, pyplot
 from .analysis import SchemeResult
 
 NAUTICAL_MILE = 1852.0
@@ -94,7 +94,7 @@ def plot_scheme(result: SchemeResult, title: str) -> bytes:
         ax.set_xlabel("time (h)")
         ax.set_ylabel("m")
         ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, loc="upper left")
+    legend_outside(axes[1], fontsize=7)
     fig.suptitle(title)
     fig.tight_layout()
     return figure_bytes(fig)
@@ -112,7 +112,7 @@ def plot_comparison(results: dict[str, SchemeResult], title: str) -> bytes:
     ax.set_xlabel("time (h)")
     ax.set_ylabel("horizontal position error, 1 sigma (m)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax, fontsize=8)
     ax.set_title(title)
     fig.tight_layout()
     return figure_bytes(fig)

@@ -140,12 +140,13 @@ def draw_errors(sources: Sources, runs: int, rng: np.random.Generator,
 
 
 def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.random.Generator,
-             turn_step_deg: float = 1.0, dwell_step_s: float = 5.0, max_step_s: float = 60.0):
+             turn_step_deg: float = 1.0, dwell_step_s: float = 5.0, max_step_s: float = 60.0, progress=None):
     """Free-inertial navigation of every run; errors (v_E, v_N, north, east) at each output time.
 
     Returns ``(time (T,), errors (T, N, 4), reference (T, 4))``: the errors against the error-free run
     (index 0) and that run's own error (the algorithm's); the output times are those of
-    :func:`covariance.propagate` with the same ``max_step_s``.
+    :func:`covariance.propagate` with the same ``max_step_s``.  ``progress(fraction)``, if given, after
+    each output time with the fraction of the run's time navigated.
     """
     check_turn_step(turn_step_deg, "navigation step")
     if not (math.isfinite(dwell_step_s) and dwell_step_s > 0):
@@ -177,6 +178,8 @@ def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.r
             q, v, lat, lon = _step(q, v, lat, lon, th, dv, prev_th, prev_dv, h, site)
             prev_th, prev_dv = th, dv
         out_t.append(piece.t0 + piece.duration)
+        if progress:
+            progress(out_t[-1] / (hours * 3600.0))
         out.append(np.column_stack([v[:, 0], v[:, 1], (lat - lat0) * (r_m + h0), lon * (r_n + h0) * np.cos(lat0)]))
     err = np.array(out)
     return np.array(out_t), err - err[:, :1, :], err[:, 0, :]

@@ -1,0 +1,30 @@
+"""What the long commands write while they work: ``--quiet`` and ``--no-progress``, and the progress
+(:class:`core.progress.Progress`: a bar on a terminal, a line per 10 % or 10 s in a log)."""
+
+from __future__ import annotations
+
+from ..core.progress import Progress, progress_mode
+
+#: The commands that take long enough to report progress.
+LONG_COMMANDS = ("simulate", "calibrate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo",
+                 "modulate", "modulate-mc", "batch")
+
+
+def add_log_options(p) -> None:
+    """``--quiet`` and ``--no-progress`` on a command's parser."""
+    p.add_argument("--no-progress", action="store_true", help="no progress bar or progress lines (also: the "
+                   "environment variable TQDM_DISABLE=1); without it, a bar on a terminal and a line per 10 %% or "
+                   "10 s in a log or file")
+    p.add_argument("--quiet", action="store_true", help="only the results, warnings and errors: no progress, no "
+                   "per-step messages")
+
+
+def progress_for(args, total: float, desc: str, unit: str = "step") -> Progress:
+    """The progress of a command's work (off with ``--quiet`` or ``--no-progress``)."""
+    enabled = not (getattr(args, "quiet", False) or getattr(args, "no_progress", False))
+    return Progress(total, desc, unit, mode=progress_mode(enabled=enabled))
+
+
+def steps_printer(args):
+    """``print`` for the library's step messages, or None with ``--quiet`` or ``--no-progress``."""
+    return None if getattr(args, "quiet", False) or getattr(args, "no_progress", False) else print

@@ -38,7 +38,7 @@ def add_thermal_command(sub) -> None:
                    help="polynomial order per parameter: auto (by evidence, default), 1 or 2 for all")
     p.add_argument("--reference-c", type=float, default=25.0, help="reference temperature T_ref, degC (default 25)")
     p.add_argument("--at", type=float, nargs="+", default=[], metavar="T",
-                   help="write the parameter table at each temperature T (degC): DIR/at-<T>C.csv")
+                   help="write the parameter table at each temperature T (degC): DIR/at-<T>C.csv (default: none)")
     p.add_argument("--no-plots", action="store_true", help="leave out the plots")
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=cmd_thermal)

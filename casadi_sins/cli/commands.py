@@ -137,14 +137,14 @@ def cmd_calibrate(args) -> int:
     """``calibrate``: the parameter table, its report, plots and exports, all written together."""
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
-    rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
+    rec = refine(read_recording(args.recording), args.min_rest_s)  # approximate segment times: trimmed, or rejected
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
         result = calibrate(rec, solver=args.solver, initial=initial, progress=print, noise=noise, model=args.model,
-                           refine_segments=False, **options)  # refined above: the report shows those times
+                           refine_segments=False, min_rest_s=args.min_rest_s, **options)  # refined above
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
     if args.strict and result.warnings:

@@ -64,6 +64,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")
     p.add_argument("--unit-id", help="serial number of the unit, for the report and exports")
+    p.add_argument("--min-rest-s", type=float, help="shortest rest a static segment must keep, s (default: from the "
+                   "measured noise and rate, stated in the report)")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")

@@ -43,6 +43,7 @@ from ..core.errors import InputError
 from ..core.rotations import triad
 from .edges import Activity, MotionSpan, activity, angle_track, find_motions, static_stretches, trim_rest  # noqa: F401
 from .recording import Recording, Segment, validate_schedule
+from .rests import minimum_rest
 
 #: The shortest rest that counts as a static segment (s).
 MIN_STATIC_S = 20.0
@@ -271,16 +272,23 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
     return rec, notes
 
 
-def refine(rec: Recording, min_static_s: float = 5.0) -> Recording:
+def _below(seconds: float) -> str:
+    """A round number of seconds just under ``seconds`` (the option a refusal suggests)."""
+    return f"{math.floor(seconds * 10.0) / 10.0:g}" if seconds >= 0.2 else f"{seconds * 0.9:.2g}"
+
+
+def refine(rec: Recording, min_rest_s: float | None = None) -> Recording:
     """Check a description's static segments against the data: trim motion at their edges (the rotations
     beside them grow to meet them; a warning in ``rec.warnings`` saying so), reject motion inside one
-    (naming it).
+    (naming it), and a rest shorter than ``min_rest_s`` (default: what a rest must determine given the
+    measured noise and rate, :func:`data.rests.minimum_rest`).
 
     The rate magnitude finds motion well inside a segment; the edges are then placed at the fitted onset
     of the motion beside them (:func:`data.edges.trim_rest`), so that slow handling or a turn that a
     stated time runs into is cut off rather than left to look like a swaying base.  A description that
     needs nothing is returned as it is (the same object).
     """
+    rule = minimum_rest(rec, min_rest_s)
     act = activity(rec.gyro, rec.rate_hz)
     moving = act.magnitude > act.edge
     track = angle_track(rec.gyro)
@@ -297,9 +305,10 @@ def refine(rec: Recording, min_static_s: float = 5.0) -> Recording:
             raise InputError(rec.label, f"{seg.describe()} holds motion inside it ({times[0]:.2f}-{times[-1]:.2f} "
                                  "s): check the segment times, or let `casadi-sins segment` find them")
         first, stop = trim_rest(track, moving, sl.start + int(quiet[0]), sl.start + int(quiet[-1]) + 1, rec.rate_hz)
-        if (stop - first) * rec.dt < min_static_s:
-            raise InputError(rec.label, f"{seg.describe()} is at rest for only {(stop - first) * rec.dt:.2f} s: "
-                                 "check the segment times, or let `casadi-sins segment` find them")
+        if (stop - first) * rec.dt < rule.seconds:
+            raise InputError(rec.label, f"{seg.describe()} is at rest for only {(stop - first) * rec.dt:.2f} s, "
+                             f"under the shortest rest ({rule.reason}): check the segment times, or state "
+                             f"--min-rest-s {_below((stop - first) * rec.dt)}")
         if (first, stop) == (sl.start, sl.stop):
             continue
         start = max(round(float(rec.time[first] - rec.dt), 9), seg.start)

@@ -261,7 +261,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
         return fit, assessment
     # errors outside the model: an unmodelled acceleration per static segment, an unmodelled rate per gyro
     # mean (and a velocity error per rotation), with variances from the residuals, and solve again
-    unmodelled = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,
+    unmodelled, tops = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,
                                      fit.use_rotation_steps)
     run.say(f"residuals exceed the noise model: unmodelled acceleration {unmodelled.unmodelled_acceleration / UG:.3g} "
             f"ug per static segment, unmodelled rate {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean, "
@@ -274,7 +274,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     assessment = assess(graph, fit, run.noise_plan)
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
-    run.warnings += unmodelled_at_bounds(unmodelled)
+    run.warnings += unmodelled_at_bounds(unmodelled, tops)
     run.warnings.append(f"the residuals exceeded the sensor noise ({'; '.join(failed)}): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
                         f"per static segment, {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per static gyro "

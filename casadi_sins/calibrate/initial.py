@@ -36,7 +36,7 @@ from ..model.registry import ACCEL_SCALE, GYRO_BIAS, GYRO_SCALE, N_PARAMS
 
 #: A rotation whose pulses off its nominal axis exceed this share of those on it is a move by hand about
 #: several axes: its nominal angle sets no rough scale factor while other turns about the axis do.
-HANDLING_SHARE = 1e9
+HANDLING_SHARE = 0.3
 
 
 def _static_means(rec: Recording, pulses: np.ndarray) -> np.ndarray:

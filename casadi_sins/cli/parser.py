@@ -75,7 +75,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
     p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
     p.add_argument("--name", help="recording name (default: the output's stem)")
-    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment (s)")
+    p.add_argument("--min-static-s", type=float, help="shortest rest taken as a static segment, s (default: a "
+                   "turntable schedule with rests of 20 s, else a session by hand with rests from the data)")
     p.add_argument("--out", required=True, help="recording description NAME.toml to write")
     p.set_defaults(func=cmd_segment)
 

@@ -43,6 +43,7 @@ from ..core.errors import InputError
 from ..core.rotations import triad
 from .edges import Activity, MotionSpan, activity, angle_track, find_motions, static_stretches, trim_rest  # noqa: F401
 from .recording import Recording, Segment, validate_schedule
+from .handling import detect_handled
 from .rests import minimum_rest
 
 #: The shortest rest that counts as a static segment (s).
@@ -94,16 +95,21 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
     gyro_size = _sizes_from_turns(gyro, statics, gyro_means, gyro_size)
     letters = [_orientation(f * accel_size, w * gyro_size) for f, w in zip(accel_means, gyro_means)]
     segments, notes = _chain(time, gyro, statics, set(jumps_at), gyro_means, gyro_size, letters)
-    # groups need a rotation: a lone static position calibrates nothing
+    out = _with_rotations(segments, notes)
+    if not out:
+        raise InputError(None, _no_turns(gyro, statics, set(jumps_at), gyro_means, gyro_size, accel_means, letters))
+    return out, notes
+
+
+def _with_rotations(segments: list[Segment], notes: list[str]) -> list[Segment]:
+    """The groups that hold a rotation, renumbered (a lone static position calibrates nothing; a note says so)."""
     kept = [g for g in {s.group for s in segments} if sum(1 for s in segments if s.group == g) > 1]
     dropped = sorted({s.group for s in segments} - set(kept))
     if dropped:
         notes.append(f"{len(dropped)} lone static position(s) without a rotation left out")
-    if not kept:
-        raise InputError(None, _no_turns(gyro, statics, set(jumps_at), gyro_means, gyro_size, accel_means, letters))
     renumber = {g: i + 1 for i, g in enumerate(sorted(kept))}
     out = [dataclasses.replace(s, group=renumber[s.group]) for s in segments if s.group in renumber]
-    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)], notes
+    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)]
 
 
 def _chain(time, gyro, statics, jumps_at: set, gyro_means, gyro_size, letters):
@@ -263,10 +269,15 @@ def _orientation(force: np.ndarray, rate: np.ndarray) -> str | None:
 
 
 def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
-                      min_static_s: float = MIN_STATIC_S) -> tuple[Recording, list[str]]:
-    """A validated recording whose segments were found in its data (see the module docstring)."""
+                      min_static_s: float | None = None) -> tuple[Recording, list[str]]:
+    """A validated recording whose segments were found in its data (see the module docstring).
+
+    Without ``min_static_s`` a turntable schedule is looked for first (rests of :data:`MIN_STATIC_S`); when
+    there is none, a session turned by hand (:mod:`data.handling`: short rests, turns off multiples of
+    90 deg, moves about several axes, gyros that do not resolve the Earth rate).
+    """
     with np.errstate(all="ignore"):  # absurd pulses (1e300) end in a reason, not in a page of warnings
-        segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
+        segments, notes = _detect_any(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
     return rec, notes
@@ -275,6 +286,25 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
 def _below(seconds: float) -> str:
     """A round number of seconds just under ``seconds`` (the option a refusal suggests)."""
     return f"{math.floor(seconds * 10.0) / 10.0:g}" if seconds >= 0.2 else f"{seconds * 0.9:.2g}"
+
+
+def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: float | None):
+    """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled`."""
+    if min_static_s is not None:
+        return detect(time, gyro, accel, rate_hz, site, min_static_s)
+    try:
+        return detect(time, gyro, accel, rate_hz, site, MIN_STATIC_S)
+    except InputError as table_error:
+        if table_error.reason.startswith("no motion"):
+            raise
+        try:
+            segments, notes = detect_handled(time, gyro, accel, rate_hz)
+        except InputError:
+            raise table_error from None
+        segments = _with_rotations(segments, notes)
+        if not segments:
+            raise table_error from None
+        return segments, [f"no turntable schedule ({table_error.reason}): segmented as a session turned by hand"] + notes
 
 
 def refine(rec: Recording, min_rest_s: float | None = None) -> Recording:

@@ -61,3 +61,18 @@ def test_the_report_says_what_this_grade_determines(calibrated):
     assert "## What this unit and schedule determine" in markdown
     rest = next(c for c in report["checks"] if c["name"] == "shortest rest")
     assert rest["passed"] and rest["value"] < 5.0 and "measured accelerometer noise" in rest["detail"]
+
+
+def test_segment_on_the_raw_csv_gives_a_description_that_calibrates(tmp_path, capsys):
+    """No description at all: `segment` finds the hand-turned schedule (short rests, a 176-deg turn, moves
+    about several axes) and its description calibrates with the defaults, in agreement with imucal."""
+    described = tmp_path / "segmented.toml"
+    assert main(["segment", str(FIXTURE / "ferraris.csv.gz"), "--rate", "102.4", "--latitude", "49.6",
+                 "--height", "280", "--out", str(described)]) == 0
+    assert "segmented as a session turned by hand" in capsys.readouterr().out
+    out = tmp_path / "segmented.csv"
+    assert main(["calibrate", str(described), "--out", str(out)]) == 0
+    report = json.loads(out.with_name("segmented.report.json").read_text())
+    rows = {r["parameter"]: r for r in report["parameters"]}
+    z = [abs(rows[n]["value"] - ref) / rows[n]["sigma"] for n, ref in imucal_comparable().items()]
+    assert max(z) <= AGREEMENT_SIGMA

@@ -9,6 +9,7 @@ from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
 from .modulation import cmd_modulate, cmd_modulate_mc
+from .importing import add_import_parser
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 
 
@@ -150,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.set_defaults(func=cmd_demo)
     _add_modulation(sub)
     add_production_commands(sub)
+    add_import_parser(sub)
     return parser
 
 

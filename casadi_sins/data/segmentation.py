@@ -44,7 +44,7 @@ from ..core.rotations import triad
 from .edges import Activity, MotionSpan, activity, angle_track, find_motions, static_stretches, trim_rest  # noqa: F401
 from .recording import Recording, Segment, validate_schedule
 from .handling import detect_handled
-from .rests import minimum_rest
+from .refine import refine  # noqa: F401  (the check of a given description, beside the search for one)
 
 #: The shortest rest that counts as a static segment (s).
 MIN_STATIC_S = 20.0
@@ -283,11 +283,6 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
     return rec, notes
 
 
-def _below(seconds: float) -> str:
-    """A round number of seconds just under ``seconds`` (the option a refusal suggests)."""
-    return f"{math.floor(seconds * 10.0) / 10.0:g}" if seconds >= 0.2 else f"{seconds * 0.9:.2g}"
-
-
 def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: float | None):
     """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled`."""
     if min_static_s is not None:
@@ -305,55 +300,3 @@ def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: flo
         if not segments:
             raise table_error from None
         return segments, [f"no turntable schedule ({table_error.reason}): segmented as a session turned by hand"] + notes
-
-
-def refine(rec: Recording, min_rest_s: float | None = None) -> Recording:
-    """Check a description's static segments against the data: trim motion at their edges (the rotations
-    beside them grow to meet them; a warning in ``rec.warnings`` saying so), reject motion inside one
-    (naming it), and a rest shorter than ``min_rest_s`` (default: what a rest must determine given the
-    measured noise and rate, :func:`data.rests.minimum_rest`).
-
-    The rate magnitude finds motion well inside a segment; the edges are then placed at the fitted onset
-    of the motion beside them (:func:`data.edges.trim_rest`), so that slow handling or a turn that a
-    stated time runs into is cut off rather than left to look like a swaying base.  A description that
-    needs nothing is returned as it is (the same object).
-    """
-    rule = minimum_rest(rec, min_rest_s)
-    act = activity(rec.gyro, rec.rate_hz)
-    moving = act.magnitude > act.edge
-    track = angle_track(rec.gyro)
-    changed = []
-    segments = list(rec.segments)
-    for i, seg in enumerate(segments):
-        if not seg.is_static:
-            continue
-        sl = rec.segment_samples(seg)
-        flags = moving[sl]
-        quiet = np.flatnonzero(~flags)
-        if len(quiet) == 0 or flags[quiet[0]:quiet[-1] + 1].any():
-            times = rec.time[sl][flags]
-            raise InputError(rec.label, f"{seg.describe()} holds motion inside it ({times[0]:.2f}-{times[-1]:.2f} "
-                                 "s): check the segment times, or let `casadi-sins segment` find them")
-        first, stop = trim_rest(track, moving, sl.start + int(quiet[0]), sl.start + int(quiet[-1]) + 1, rec.rate_hz)
-        if (stop - first) * rec.dt < rule.seconds:
-            raise InputError(rec.label, f"{seg.describe()} is at rest for only {(stop - first) * rec.dt:.2f} s, "
-                             f"under the shortest rest ({rule.reason}): check the segment times, or state "
-                             f"--min-rest-s {_below((stop - first) * rec.dt)}")
-        if (first, stop) == (sl.start, sl.stop):
-            continue
-        start = max(round(float(rec.time[first] - rec.dt), 9), seg.start)
-        end = min(round(float(rec.time[stop - 1]), 9), seg.end)
-        cut = [f"first {(first - sl.start) * rec.dt:.2f} s" if first > sl.start else "",
-               f"last {(sl.stop - stop) * rec.dt:.2f} s" if stop < sl.stop else ""]
-        changed.append(f"{seg.describe()} trimmed to {start:.2f}-{end:.2f} s: the unit was still moving in its "
-                       f"{' and '.join(c for c in cut if c)} (motion at a static segment's edge, cut off)")
-        segments[i] = dataclasses.replace(seg, start=start, end=end)
-    if not changed:
-        return rec
-    for i, seg in enumerate(segments):  # the rotations meet the trimmed statics of their group
-        if not seg.is_static:
-            before, after = segments[i - 1], segments[i + 1]
-            segments[i] = dataclasses.replace(seg, start=before.end, end=after.start)
-    out = dataclasses.replace(rec, segments=segments, warnings=list(rec.warnings) + changed)
-    validate_schedule(out)
-    return out

@@ -21,6 +21,7 @@ from ..core.files import atomic_write_text, check_writable, safe_stem, write_fil
 from ..data.datasheet import read_datasheet
 from ..data.description import description_toml, read_recording
 from ..data.problem import load_problem
+from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
@@ -28,7 +29,7 @@ from ..nav.navigation import navigate
 from ..report.calibration import recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
-from ..report.provenance import read_provenance
+from ..report.provenance import conditions_metadata, read_provenance
 from ..report.rounding import rounded
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
@@ -156,7 +157,8 @@ def cmd_calibrate(args) -> int:
     files.update(export_files(result.parameters, args.out, args.export or (), {
         "unit_id": args.unit_id, "table": str(args.out),
         "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
-        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
+        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items()),
+        **conditions_metadata(conditions_dict(rec))}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "

@@ -130,3 +130,14 @@ def test_a_rest_refusal_names_the_option_that_lifts_it(short_problem, tmp_path, 
     assert main(["calibrate", str(path), "--out", str(tmp_path / "b.csv"), "--min-rest-s", advice]) == 0
     checks = json.loads((tmp_path / "b.report.json").read_text())["checks"]
     assert any(c["name"] == "shortest rest" and c["passed"] and "as stated" in c["detail"] for c in checks)
+
+
+def test_conditions_reach_the_exports_of_calibrate(short_rec, tmp_path):
+    from casadi_sins.cli import main
+
+    rec = dataclasses.replace(short_rec, conditions=Conditions(temperature_c=-5.0, date="2022-12-24", operator="Q"))
+    path = write_recording(rec, tmp_path / "c.toml")
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "t.csv"), "--export", "json", "psins"]) == 0
+    exported = json.loads((tmp_path / "t.compensation.json").read_text())["metadata"]
+    assert exported["temperature_c"] == -5.0 and exported["recording_date"] == "2022-12-24" and exported["operator"] == "Q"
+    assert "recording_date: 2022-12-24" in (tmp_path / "t.clbt.m").read_text()

@@ -72,9 +72,10 @@ def rough_parameters(rec: Recording) -> ParameterSet:
             axis = parse_axis(rotation.axis)
             i = int(np.argmax(np.abs(axis)))
             samples = rec.segment_samples(rotation)
+            static_rate = rec.gyro[rec.segment_samples(before), i].mean()
+            net = rec.gyro[samples, i].sum() - static_rate * (samples.stop - samples.start)
             static = rec.gyro[rec.segment_samples(before)].mean(axis=0)
-            nets = rec.gyro[samples].sum(axis=0) - static * (samples.stop - samples.start)
-            net = nets[i]
+            nets = rec.gyro[samples].sum(axis=0) - static * (samples.stop - samples.start)  # for the other axes
             if net == 0.0:
                 raise InputError(rec.label, f"{rotation.describe()} shows no rotation on gyro {'xyz'[i]}")
             estimate = math.radians(abs(rotation.angle_deg)) / abs(net)

@@ -286,7 +286,13 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
 def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: float | None):
     """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled`."""
     if min_static_s is not None:
-        return detect(time, gyro, accel, rate_hz, site, min_static_s)
+        try:
+            return detect(time, gyro, accel, rate_hz, site, min_static_s)
+        except InputError as exc:
+            if exc.reason.startswith("no motion"):
+                raise
+            raise InputError(None, f"{exc.reason}; without --min-static-s, segment also tries it as a session turned "
+                                   "by hand") from None
     try:
         return detect(time, gyro, accel, rate_hz, site, MIN_STATIC_S)
     except InputError as table_error:
@@ -294,9 +300,10 @@ def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: flo
             raise
         try:
             segments, notes = detect_handled(time, gyro, accel, rate_hz)
-        except InputError:
-            raise table_error from None
+        except InputError as hand_error:
+            raise InputError(None, f"{table_error.reason}; as a session turned by hand: {hand_error.reason}") from None
         segments = _with_rotations(segments, notes)
         if not segments:
-            raise table_error from None
+            raise InputError(None, f"{table_error.reason}; as a session turned by hand: no two rests are joined by a "
+                                   "turn") from None
         return segments, [f"no turntable schedule ({table_error.reason}): segmented as a session turned by hand"] + notes

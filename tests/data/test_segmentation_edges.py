@@ -226,3 +226,11 @@ def test_the_advice_of_a_rests_refusal_works(kang_problem, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "the longest lasts 8 s: rests too short" in err and "--min-static-s sets the shortest" in err
     assert main(args + ["--min-static-s", "7"]) == 0 and len(read_recording(tmp_path / "f.toml").static_segments) == 12
+
+
+def test_the_advice_of_a_turntable_refusal_of_a_mems_bias_works(kang_problem, tmp_path, capsys):
+    data = unusable("gyro bias 470x the Earth rate", kang_problem, tmp_path)
+    args = ["segment", str(data), "--rate", "100", "--latitude", "37.5", "--out", str(tmp_path / "f.toml")]
+    assert main(args + ["--min-static-s", "20"]) == 2
+    assert "without --min-static-s, segment also tries it as a session turned by hand" in capsys.readouterr().err
+    assert main(args) == 0

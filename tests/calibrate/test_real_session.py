@@ -14,6 +14,8 @@ import pytest
 
 from casadi_sins.cli import main
 
+pytestmark = pytest.mark.slow  # two calibrations of a real session, a minute or two each
+
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "imucal-ferraris"
 #: The bar: agreement with imucal's table within this many of our sigma.
 AGREEMENT_SIGMA = 4.5

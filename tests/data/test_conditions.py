@@ -141,3 +141,13 @@ def test_conditions_reach_the_exports_of_calibrate(short_rec, tmp_path):
     exported = json.loads((tmp_path / "t.compensation.json").read_text())["metadata"]
     assert exported["temperature_c"] == -5.0 and exported["recording_date"] == "2022-12-24" and exported["operator"] == "Q"
     assert "recording_date: 2022-12-24" in (tmp_path / "t.clbt.m").read_text()
+
+
+def test_the_fleet_table_carries_the_conditions():
+    from casadi_sins.studies.batch import row_from_report
+
+    data = {"unit_id": None, "warnings": [], "parameters": [],
+            "conditions": {"date": "2024-02-03", "temperature_c": 22.5, "unit_id": "SN-7", "bench": "T2"}}
+    row = row_from_report(data, "runs/u7.toml", "ok")
+    assert row["unit_id"] == "SN-7" and row["recorded"] == "2024-02-03" and row["temperature_c"] == 22.5
+    assert row["bench"] == "T2"

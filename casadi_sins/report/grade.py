@@ -19,10 +19,13 @@ import numpy as np
 from ..core.earth import EARTH_RATE
 from ..core.orientation import parse_axis
 from ..core.units import DEG_PER_H
-from ..model.registry import GYRO_BIAS
+from ..model.registry import GYRO_BIAS, GYRO_SCALE
 
 #: The gyro bias sigma, as a share of the horizontal Earth rate, above which the Earth rate is no reference.
 EARTH_RATE_SHARE = 0.1
+#: A turn faster than this per sample (deg) is navigated with errors beyond the model: the strapdown step's
+#: coning and sculling terms and the sensors' own filtering are built for a small angle per sample.
+STEP_ANGLE_DEG = 1.0
 
 
 def horizontal_turns(rec) -> dict[str, int]:
@@ -64,7 +67,12 @@ def grade_data(params, rec) -> dict:
         sentences.append(f"Gyro axis {', '.join(blind)} is never turned while horizontal: its scale factor is not "
                          "determined by this schedule beyond what other turns couple into it; turn the unit about it "
                          "with the axis level.")
-    return {"horizontal_earth_rate_deg_h": horizontal / DEG_PER_H,
+    step = float(np.degrees(np.max(np.abs(rec.gyro) * params.values[GYRO_SCALE]))) if len(rec.gyro) else 0.0
+    if step > STEP_ANGLE_DEG:
+        sentences.append(f"The turns reach {step:.3g} deg per sample ({step * rec.rate_hz:.3g} deg/s at "
+                         f"{rec.rate_hz:g} Hz): their navigation (coning, the sensors' own filtering) errs beyond the "
+                         "model, which weighs on the gyro scale factors and misalignments; turn slower or sample faster.")
+    return {"horizontal_earth_rate_deg_h": horizontal / DEG_PER_H, "largest_turn_per_sample_deg": step,
             "gyro_bias_sigma_deg_h": worst / DEG_PER_H if math.isfinite(worst) else None,
             "earth_rate_reference": reference, "horizontal_turns": turns, "sentences": sentences}
 

@@ -59,6 +59,7 @@ def test_the_report_says_what_this_grade_determines(calibrated):
     assert grade["gyro_bias_sigma_deg_h"] > 0.1 * grade["horizontal_earth_rate_deg_h"]
     text = " ".join(grade["sentences"])
     assert "Gyro biases come from the rests" in text and "from the turns only" in text
+    assert grade["largest_turn_per_sample_deg"] > 5.0 and "turn slower or sample faster" in text  # 870 deg/s by hand
     markdown = out.with_name("ferraris.report.md").read_text()
     assert "## What this unit and schedule determine" in markdown
     rest = next(c for c in report["checks"] if c["name"] == "shortest rest")

@@ -12,7 +12,7 @@ What it must determine:
   :data:`LEVEL_RESOLUTION` of 1 g.
 
 The shortest rest is the larger of the two, or what the user states (``--min-rest-s``).  The report
-states the rule and the shortest rest of the recording (:func:`rest_check`).
+states the rule and the shortest rest of the recording (the check "shortest rest" of :func:`calibrate.calibrate`).
 """
 
 from __future__ import annotations

@@ -15,11 +15,12 @@ from typing import Callable
 
 from ..core.threads import single_threaded
 from ..data.recording import Recording
+from ..data.rests import RestRule, minimum_rest
 from ..data.segmentation import refine
 from ..model.parameters import ParameterSet
 from .ils import calibrate_ils
 from .nlp.pipeline import calibrate_nlp
-from .result import CalibrationError, CalibrationResult
+from .result import CalibrationError, CalibrationResult, Check
 
 SOLVERS = ("nlp", "ils")
 
@@ -29,7 +30,7 @@ __all__ = ["SOLVERS", "CalibrationError", "CalibrationResult", "calibrate", "cal
 
 def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None = None,
               progress: Callable[[str], None] | None = None, refine_segments: bool = True,
-              **options) -> CalibrationResult:
+              min_rest_s: float | None = None, **options) -> CalibrationResult:
     """Calibrate a recording with the named solver: ``"nlp"`` (CasADi/Ipopt) or ``"ils"`` (the paper's).
 
     Parameters
@@ -44,6 +45,9 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
         Check the static segments against the data first (:func:`data.segmentation.refine`, a few
         milliseconds per minute of data): motion at an edge is trimmed off, with a warning that says
         so; ``False`` takes the segment times as they are.
+    min_rest_s : float, optional
+        The shortest rest a static segment must keep (default: from the measured noise and rate,
+        :func:`data.rests.minimum_rest`); the result's checks state it and the shortest rest found.
     **options
         Passed to :func:`calibrate_nlp` or :func:`calibrate_ils`.
 
@@ -61,16 +65,29 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
+    rule = minimum_rest(rec, min_rest_s)
     if refine_segments:
-        trimmed = refine(rec)
+        trimmed = refine(rec, rule.seconds if rule.stated else None)
         if progress is not None and trimmed is not rec:
             for message in trimmed.warnings[len(rec.warnings):]:
                 progress(message)
         rec = trimmed
     with single_threaded():
         if solver == "nlp":
-            return calibrate_nlp(rec, initial=initial, progress=progress, **options)
-        return calibrate_ils(rec, initial=initial, progress=progress, **options)
+            result = calibrate_nlp(rec, initial=initial, progress=progress, **options)
+        else:
+            result = calibrate_ils(rec, initial=initial, progress=progress, **options)
+    result.checks.append(rest_check(rec, rule))
+    return result
+
+
+def rest_check(rec: Recording, rule: RestRule) -> Check:
+    """The shortest static segment against the shortest rest accepted, with the rule's reason (a check of the
+    report: the minimum is stated, never a bare limit)."""
+    shortest = min(rec.static_segments, key=lambda s: s.end - s.start)
+    length = shortest.end - shortest.start
+    return Check("shortest rest", float(length), float(rec.time[-1] - rec.time[0] + rec.dt), length >= rule.seconds,
+                 f"{shortest.describe()}; shortest rest accepted {rule.reason}", low=float(rule.seconds))
 
 
 def prepare_compiled(model="21", bias_instability: bool = False) -> None:

@@ -12,7 +12,10 @@
   the nominal angle.  Averaged over the rotations about each axis.  An axis
   that is never turned falls back to the Earth-rate magnitude of the static
   segments.
-* ``K = I``, ``B = 0``.
+* ``K = I``, ``B = 0`` -- except the gyro biases of a unit whose resting gyros read far more than the
+  Earth rate, the same in every orientation (a MEMS unit, :func:`data.segmentation.bias_ratio`): their
+  rough values are the rests' mean rate (the Earth rate, below their noise, is left in), so that the
+  solver does not start degrees per second away.  A navigation-grade unit keeps the paper's ``B = 0``.
 """
 
 from __future__ import annotations
@@ -26,8 +29,14 @@ from ..core.earth import EARTH_RATE
 from ..core.errors import InputError
 from ..core.orientation import parse_axis
 from ..data.recording import Recording
+from ..data.segmentation import BIAS_RATIO_LIMIT, bias_ratio
 from ..model.parameters import ParameterSet
-from ..model.registry import ACCEL_SCALE, GYRO_SCALE, N_PARAMS
+from ..model.registry import ACCEL_SCALE, GYRO_BIAS, GYRO_SCALE, N_PARAMS
+
+
+#: A rotation whose pulses off its nominal axis exceed this share of those on it is a move by hand about
+#: several axes: its nominal angle sets no rough scale factor while other turns about the axis do.
+HANDLING_SHARE = 0.3
 
 
 def _static_means(rec: Recording, pulses: np.ndarray) -> np.ndarray:
@@ -56,6 +65,7 @@ def rough_parameters(rec: Recording) -> ParameterSet:
     values[ACCEL_SCALE] = _magnitude_scale(_static_means(rec, rec.accel), rec.site.g * dt, "accelerometer", rec)
 
     estimates: list[list[float]] = [[], [], []]
+    handled: list[list[float]] = [[], [], []]
     for group in rec.group_ids:
         segs = rec.group_segments(group)
         for before, rotation in zip(segs[0::2], segs[1::2]):
@@ -64,9 +74,16 @@ def rough_parameters(rec: Recording) -> ParameterSet:
             samples = rec.segment_samples(rotation)
             static_rate = rec.gyro[rec.segment_samples(before), i].mean()
             net = rec.gyro[samples, i].sum() - static_rate * (samples.stop - samples.start)
+            static = rec.gyro[rec.segment_samples(before)].mean(axis=0)
+            nets = rec.gyro[samples].sum(axis=0) - static * (samples.stop - samples.start)  # for the other axes
             if net == 0.0:
                 raise InputError(rec.label, f"{rotation.describe()} shows no rotation on gyro {'xyz'[i]}")
-            estimates[i].append(math.radians(abs(rotation.angle_deg)) / abs(net))
+            estimate = math.radians(abs(rotation.angle_deg)) / abs(net)
+            # a move by hand about several axes, written as its nominal single-axis turn, says little of a scale
+            handling = np.linalg.norm(np.delete(nets, i)) > HANDLING_SHARE * abs(net)
+            (handled if handling else estimates)[i].append(estimate)
+    for i in range(3):
+        estimates[i] = estimates[i] or handled[i]
     missing = [i for i in range(3) if not estimates[i]]
     gyro_scale = np.array([np.mean(e) if e else np.nan for e in estimates])
     if missing:
@@ -82,4 +99,14 @@ def rough_parameters(rec: Recording) -> ParameterSet:
         if np.isnan(gyro_scale).any():
             raise InputError(rec.label, "gyro scale factors cannot be set from this schedule")
     values[GYRO_SCALE] = gyro_scale
+    values[GYRO_BIAS] = _large_gyro_bias(rec, gyro_scale)
     return ParameterSet(values)
+
+
+def _large_gyro_bias(rec: Recording, gyro_scale: np.ndarray) -> np.ndarray:
+    """The rests' length-weighted mean gyro rate (rad/s) when it dwarfs the Earth rate, else zeros."""
+    gyro_means, accel_means = _static_means(rec, rec.gyro), _static_means(rec, rec.accel)
+    if bias_ratio(gyro_means, accel_means) <= BIAS_RATIO_LIMIT:
+        return np.zeros(3)
+    lengths = np.array([s.end - s.start for s in rec.static_segments])
+    return gyro_scale * (lengths @ gyro_means) / lengths.sum() / rec.dt

@@ -22,6 +22,7 @@ from ..core.files import atomic_write_text, check_writable, safe_stem, write_fil
 from ..data.datasheet import read_datasheet
 from ..data.description import description_toml, read_recording
 from ..data.problem import load_problem
+from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
@@ -30,7 +31,7 @@ from ..report.acceptance import judge, read_acceptance_sheet
 from ..report.calibration import companion_paths, recording_hash, report_files
 from ..report.exports import EXPORTS, export_files
 from ..report.plots import plot_navigation
-from ..report.provenance import read_provenance
+from ..report.provenance import conditions_metadata, read_provenance
 from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
@@ -141,14 +142,14 @@ def cmd_calibrate(args) -> int:
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
     sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
-    rec = refine(read_recording(args.recording))  # approximate segment times: trimmed, or rejected naming one
+    rec = refine(read_recording(args.recording), args.min_rest_s)  # approximate segment times: trimmed, or rejected
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None
     options = {"max_iterations": args.max_iterations} if args.max_iterations else {}
     try:
         result = calibrate(rec, solver=args.solver, initial=initial, progress=steps_printer(args), noise=noise, model=args.model,
-                           refine_segments=False, **options)  # refined above: the report shows those times
+                           refine_segments=False, min_rest_s=args.min_rest_s, **options)  # refined above
     except CalibrationError as exc:
         raise CliError(f"{rec.label}: calibration failed, no parameter table written: {exc}") from None
     if args.strict and result.warnings:
@@ -163,7 +164,8 @@ def cmd_calibrate(args) -> int:
         "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
         "calibrated_with": report["software"],
         "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
-        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items())}))
+        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items()),
+        **conditions_metadata(conditions_dict(rec))}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "

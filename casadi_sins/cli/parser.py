@@ -10,6 +10,7 @@ from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_mo
                        cmd_navigate, cmd_rough, cmd_segment, cmd_validate)
 from .logs import LONG_COMMANDS, add_log_options
 from .modulation import cmd_modulate, cmd_modulate_mc
+from .importing import add_import_parser
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 from .thermal import add_thermal_command, cmd_export_any, cmd_simulate_any
 
@@ -74,6 +75,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
                    "an acceptance column marking the parameters out of their limits")
     p.add_argument("--certificate", action="store_true", help="also write NAME.certificate.html: one self-contained "
                    "HTML file printable on A4 (unit id, recording hash, table rounded to sigma, checks, verdict)")
+    p.add_argument("--min-rest-s", type=float, help="shortest rest a static segment must keep, s (default: from the "
+                   "measured noise and rate, stated in the report)")
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")
@@ -83,8 +86,8 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
     p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
     p.add_argument("--name", help="recording name (default: the output's stem)")
-    p.add_argument("--min-static-s", type=float, default=20.0, help="shortest rest taken as a static segment, s "
-                   "(default 20)")
+    p.add_argument("--min-static-s", type=float, help="shortest rest taken as a static segment, s (default: a "
+                   "turntable schedule with rests of 20 s, else a session by hand with rests from the data)")
     p.add_argument("--out", required=True, help="recording description NAME.toml to write")
     p.set_defaults(func=cmd_segment)
 
@@ -167,6 +170,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
         add_log_options(sub.choices[name])
     for action in sub._choices_actions:  # each command's --help starts with its one-line description
         sub.choices[action.dest].description = sub.choices[action.dest].description or action.help
+    add_import_parser(sub)
     return parser
 
 

@@ -57,6 +57,25 @@ def read_recording(path: str | Path) -> Recording:
         With the file and the line or segment of the first problem found.
     """
     path = Path(path)
+    head = read_description(path)
+    data_path = path.parent / head["data"]
+    time, pulses, temperature = read_samples(data_path, head["rate_hz"], with_temperature=True)
+    _check_temperature(temperature, data_path)
+    rec = Recording(name=head["name"], site=head["site"], rate_hz=head["rate_hz"], segments=head["segments"],
+                    time=time, gyro=pulses[:, :3], accel=pulses[:, 3:], source=path, warnings=head["warnings"],
+                    conditions=head["conditions"], temperature=temperature)
+    rate_warning = check_rate(time, head["rate_hz"], data_path)
+    if rate_warning:
+        rec.warnings.append(rate_warning)
+    validate_schedule(rec)
+    check_physical_range(rec, data_path)
+    return rec
+
+
+def read_description(path: str | Path) -> dict:
+    """The description alone (no samples): ``name``, ``data``, ``site``, ``rate_hz``, ``segments``,
+    ``conditions`` and ``warnings``; each problem an :class:`InputError` naming the file and line."""
+    path = Path(path)
     doc, text = read_toml_text(path, "recording description")
     if doc.get("format") != FORMAT:
         raise InputError(path, f"format must be {FORMAT!r}, found {shown(doc.get('format'))}")
@@ -76,18 +95,8 @@ def read_recording(path: str | Path) -> Recording:
         raise InputError(path, f"[imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz:g}")
     segments = _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments"))
     conditions, notes = parse_conditions(doc.get("conditions"), path)
-    data_path = path.parent / data_name
-    time, pulses, temperature = read_samples(data_path, rate_hz, with_temperature=True)
-    _check_temperature(temperature, data_path)
-    rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time,
-                    gyro=pulses[:, :3], accel=pulses[:, 3:], source=path, warnings=notes,
-                    conditions=conditions, temperature=temperature)
-    rate_warning = check_rate(time, rate_hz, data_path)
-    if rate_warning:
-        rec.warnings.append(rate_warning)
-    validate_schedule(rec)
-    check_physical_range(rec, data_path)
-    return rec
+    return {"name": name, "data": data_name, "site": site, "rate_hz": rate_hz, "segments": segments,
+            "conditions": conditions, "warnings": notes}
 
 
 def _check_temperature(temperature, data_path) -> None:

@@ -54,6 +54,8 @@ EXPONENTS = (2.0, 3.0)
 #: Largest safety margin (s) a static keeps from the fitted onset, and how many noise levels it spans.
 MAX_MARGIN_S = 0.05
 MARGIN_SIGMAS = 2.0
+#: The rest the onset fit needs before the motion it fits (s).
+ONSET_REST_S = 0.2
 #: A stated static is trimmed when the motion fitted inside it departs this many noise levels at its edge.
 TRIM_SIGMAS = 10.0
 
@@ -148,7 +150,7 @@ def onset(track: AngleTrack, rest_first: int, moving: int, rate_hz: float) -> On
     rest = int(round(REST_WINDOW_S * rate_hz))
     hi = min(len(track) - 1, moving + int(round(PAST_MOTION_S * rate_hz)))
     lo = max(rest_first, moving - rest)
-    minimum = max(3, int(round(0.2 * rate_hz)))  # boundaries of rest the line needs at least
+    minimum = max(3, int(round(ONSET_REST_S * rate_hz)))  # boundaries of rest the line needs at least
     while True:
         first = min(lo + minimum, moving)
         k0, p, _, c = _fit(track.window(lo, hi), first - lo, min(moving + 3, hi) - lo, rate_hz)

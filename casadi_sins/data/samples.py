@@ -63,7 +63,7 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
-    time, pulses = _check_time(data_path, values[:, :len(COLUMNS)], rate_hz)
+    time, pulses = check_time(data_path, values[:, :len(COLUMNS)], rate_hz)
     if not with_temperature:
         return time, pulses
     return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
@@ -142,7 +142,7 @@ def _row_values(data_path: Path, columns: list[str], take: list[int], row: list[
     return values
 
 
-def _check_time(data_path: Path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+def check_time(data_path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """Time strictly increasing at the uniform rate; returns ``(time, pulses)``."""
     if len(values) < 2:
         raise InputError(data_path, "fewer than two samples")

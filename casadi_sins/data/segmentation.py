@@ -43,6 +43,8 @@ from ..core.errors import InputError
 from ..core.rotations import triad
 from .edges import Activity, MotionSpan, activity, angle_track, find_motions, static_stretches, trim_rest  # noqa: F401
 from .recording import Recording, Segment, validate_schedule
+from .handling import detect_handled
+from .refine import refine  # noqa: F401  (the check of a given description, beside the search for one)
 
 #: The shortest rest that counts as a static segment (s).
 MIN_STATIC_S = 20.0
@@ -93,16 +95,21 @@ def detect(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rate_hz: float
     gyro_size = _sizes_from_turns(gyro, statics, gyro_means, gyro_size)
     letters = [_orientation(f * accel_size, w * gyro_size) for f, w in zip(accel_means, gyro_means)]
     segments, notes = _chain(time, gyro, statics, set(jumps_at), gyro_means, gyro_size, letters)
-    # groups need a rotation: a lone static position calibrates nothing
+    out = _with_rotations(segments, notes)
+    if not out:
+        raise InputError(None, _no_turns(gyro, statics, set(jumps_at), gyro_means, gyro_size, accel_means, letters))
+    return out, notes
+
+
+def _with_rotations(segments: list[Segment], notes: list[str]) -> list[Segment]:
+    """The groups that hold a rotation, renumbered (a lone static position calibrates nothing; a note says so)."""
     kept = [g for g in {s.group for s in segments} if sum(1 for s in segments if s.group == g) > 1]
     dropped = sorted({s.group for s in segments} - set(kept))
     if dropped:
         notes.append(f"{len(dropped)} lone static position(s) without a rotation left out")
-    if not kept:
-        raise InputError(None, _no_turns(gyro, statics, set(jumps_at), gyro_means, gyro_size, accel_means, letters))
     renumber = {g: i + 1 for i, g in enumerate(sorted(kept))}
     out = [dataclasses.replace(s, group=renumber[s.group]) for s in segments if s.group in renumber]
-    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)], notes
+    return [dataclasses.replace(s, number=i + 1) for i, s in enumerate(out)]
 
 
 def _chain(time, gyro, statics, jumps_at: set, gyro_means, gyro_size, letters):
@@ -262,59 +269,41 @@ def _orientation(force: np.ndarray, rate: np.ndarray) -> str | None:
 
 
 def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
-                      min_static_s: float = MIN_STATIC_S) -> tuple[Recording, list[str]]:
-    """A validated recording whose segments were found in its data (see the module docstring)."""
+                      min_static_s: float | None = None) -> tuple[Recording, list[str]]:
+    """A validated recording whose segments were found in its data (see the module docstring).
+
+    Without ``min_static_s`` a turntable schedule is looked for first (rests of :data:`MIN_STATIC_S`); when
+    there is none, a session turned by hand (:mod:`data.handling`: short rests, turns off multiples of
+    90 deg, moves about several axes, gyros that do not resolve the Earth rate).
+    """
     with np.errstate(all="ignore"):  # absurd pulses (1e300) end in a reason, not in a page of warnings
-        segments, notes = detect(time, gyro, accel, rate_hz, site, min_static_s)
+        segments, notes = _detect_any(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
     return rec, notes
 
 
-def refine(rec: Recording, min_static_s: float = 5.0) -> Recording:
-    """Check a description's static segments against the data: trim motion at their edges (the rotations
-    beside them grow to meet them; a warning in ``rec.warnings`` saying so), reject motion inside one
-    (naming it).
-
-    The rate magnitude finds motion well inside a segment; the edges are then placed at the fitted onset
-    of the motion beside them (:func:`data.edges.trim_rest`), so that slow handling or a turn that a
-    stated time runs into is cut off rather than left to look like a swaying base.  A description that
-    needs nothing is returned as it is (the same object).
-    """
-    act = activity(rec.gyro, rec.rate_hz)
-    moving = act.magnitude > act.edge
-    track = angle_track(rec.gyro)
-    changed = []
-    segments = list(rec.segments)
-    for i, seg in enumerate(segments):
-        if not seg.is_static:
-            continue
-        sl = rec.segment_samples(seg)
-        flags = moving[sl]
-        quiet = np.flatnonzero(~flags)
-        if len(quiet) == 0 or flags[quiet[0]:quiet[-1] + 1].any():
-            times = rec.time[sl][flags]
-            raise InputError(rec.label, f"{seg.describe()} holds motion inside it ({times[0]:.2f}-{times[-1]:.2f} "
-                                 "s): check the segment times, or let `casadi-sins segment` find them")
-        first, stop = trim_rest(track, moving, sl.start + int(quiet[0]), sl.start + int(quiet[-1]) + 1, rec.rate_hz)
-        if (stop - first) * rec.dt < min_static_s:
-            raise InputError(rec.label, f"{seg.describe()} is at rest for only {(stop - first) * rec.dt:.2f} s: "
-                                 "check the segment times, or let `casadi-sins segment` find them")
-        if (first, stop) == (sl.start, sl.stop):
-            continue
-        start = max(round(float(rec.time[first] - rec.dt), 9), seg.start)
-        end = min(round(float(rec.time[stop - 1]), 9), seg.end)
-        cut = [f"first {(first - sl.start) * rec.dt:.2f} s" if first > sl.start else "",
-               f"last {(sl.stop - stop) * rec.dt:.2f} s" if stop < sl.stop else ""]
-        changed.append(f"{seg.describe()} trimmed to {start:.2f}-{end:.2f} s: the unit was still moving in its "
-                       f"{' and '.join(c for c in cut if c)} (motion at a static segment's edge, cut off)")
-        segments[i] = dataclasses.replace(seg, start=start, end=end)
-    if not changed:
-        return rec
-    for i, seg in enumerate(segments):  # the rotations meet the trimmed statics of their group
-        if not seg.is_static:
-            before, after = segments[i - 1], segments[i + 1]
-            segments[i] = dataclasses.replace(seg, start=before.end, end=after.start)
-    out = dataclasses.replace(rec, segments=segments, warnings=list(rec.warnings) + changed)
-    validate_schedule(out)
-    return out
+def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: float | None):
+    """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled`."""
+    if min_static_s is not None:
+        try:
+            return detect(time, gyro, accel, rate_hz, site, min_static_s)
+        except InputError as exc:
+            if exc.reason.startswith("no motion"):
+                raise
+            raise InputError(None, f"{exc.reason}; without --min-static-s, segment also tries it as a session turned "
+                                   "by hand") from None
+    try:
+        return detect(time, gyro, accel, rate_hz, site, MIN_STATIC_S)
+    except InputError as table_error:
+        if table_error.reason.startswith("no motion"):
+            raise
+        try:
+            segments, notes = detect_handled(time, gyro, accel, rate_hz)
+        except InputError as hand_error:
+            raise InputError(None, f"{table_error.reason}; as a session turned by hand: {hand_error.reason}") from None
+        segments = _with_rotations(segments, notes)
+        if not segments:
+            raise InputError(None, f"{table_error.reason}; as a session turned by hand: no two rests are joined by a "
+                                   "turn") from None
+        return segments, [f"no turntable schedule ({table_error.reason}): segmented as a session turned by hand"] + notes

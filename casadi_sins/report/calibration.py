@@ -33,6 +33,7 @@ from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..core.text import markdown_text, plural
 from .acceptance import Verdict
 from .certificate import certificate_html
+from .grade import grade_data, grade_markdown
 from .plots import noise_plot, residual_plot
 from .rounding import parameter_display
 from .tables import calibration_tables, markdown_table, natural_noise_frame
@@ -148,6 +149,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "warnings": list(result.warnings),
         "checks": checks,
         "variance_factor": float(result.variance_factor),
+        "grade": grade_data(result.parameters, rec),
         "parameters": parameter_rows(result.parameters, truth),
         "covariance": (None if result.parameters.covariance is None
                        else [[float(x) for x in row] for row in result.parameters.covariance]),  # SI, table order
@@ -188,7 +190,6 @@ def report_markdown(data: dict) -> str:
              f"{plural(rec['segments'], 'segment')}; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
     if data.get("command"):
         lines.append(f"- command: {markdown_text(data['command'])}")
-    lines += _conditions_lines(data.get("conditions"))
     lines += _verdict_lines(data)
     status = "converged" if data["converged"] else "NOT converged"
     if "ipopt" in data:
@@ -200,6 +201,8 @@ def report_markdown(data: dict) -> str:
         lines.append(f"- solver: ILS (the paper's), {data['iterations']} iterations, {data['equations']} equations, "
                      f"{status}")
     lines.append(f"- wall time {data['wall_time_s']:.2f} s; sigma: {data['sigma_meaning']}")
+    lines += _conditions_lines(data.get("conditions"))[:-1]
+    lines += grade_markdown(data.get("grade"))
     lines += ["", "## Warnings", ""]
     lines += [f"- **{markdown_text(w)}**" for w in data["warnings"]] or ["- none"]
     lines += ["", "## Parameters", ""]

@@ -78,12 +78,17 @@ class Provenance:
                "recording": self.recording, "recording_sha256": self.recording_sha256, "solver": self.solver,
                "calibrated_with": self.software,
                "versions": ", ".join(f"{k} {v}" for k, v in self.versions.items()) or None}
-        for key, value in self.conditions.items():
-            if key != "temperature_source":
-                out[f"recording_{key}" if key in ("date", "unit_id") else key] = value
+        out.update(conditions_metadata(self.conditions))
         if not self.from_report:
             out["provenance"] = "no companion report beside the table: unit, date and recording unknown"
         return {k: v for k, v in out.items() if v is not None}
+
+
+def conditions_metadata(conditions: dict) -> dict:
+    """Recording conditions as entries of an export's metadata block (``recording_date``, ``temperature_c``,
+    ``operator``, ``bench``, ``recording_unit_id``)."""
+    return {f"recording_{k}" if k in ("date", "unit_id") else k: v for k, v in conditions.items()
+            if k != "temperature_source"}
 
 
 def read_provenance(table_path: str | Path) -> Provenance:

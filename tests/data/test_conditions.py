@@ -114,3 +114,40 @@ def test_history_orders_by_recording_date_and_gives_no_drift_over_a_short_span()
     assert np.isnan(drift_rates(close)[0]).all()
     summary = summary_frame(close, changes_frame(close))
     assert summary["drift_per_year"].isna().all() and summary["z_first_to_last"].notna().all()
+
+
+def test_a_rest_refusal_names_the_option_that_lifts_it(short_problem, tmp_path, capsys):
+    """The refusal of a short rest suggests --min-rest-s; following its advice calibrates."""
+    import re
+
+    from casadi_sins.cli import main
+
+    path = write_recording(simulate(short_problem, seed=4).recording, tmp_path / "s.toml")
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "a.csv"), "--min-rest-s", "30"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "at rest for only" in err
+    advice = re.search(r"--min-rest-s ([0-9.]+)", err).group(1)
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "b.csv"), "--min-rest-s", advice]) == 0
+    checks = json.loads((tmp_path / "b.report.json").read_text())["checks"]
+    assert any(c["name"] == "shortest rest" and c["passed"] and "as stated" in c["detail"] for c in checks)
+
+
+def test_conditions_reach_the_exports_of_calibrate(short_rec, tmp_path):
+    from casadi_sins.cli import main
+
+    rec = dataclasses.replace(short_rec, conditions=Conditions(temperature_c=-5.0, date="2022-12-24", operator="Q"))
+    path = write_recording(rec, tmp_path / "c.toml")
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "t.csv"), "--export", "json", "psins"]) == 0
+    exported = json.loads((tmp_path / "t.compensation.json").read_text())["metadata"]
+    assert exported["temperature_c"] == -5.0 and exported["recording_date"] == "2022-12-24" and exported["operator"] == "Q"
+    assert "recording_date: 2022-12-24" in (tmp_path / "t.clbt.m").read_text()
+
+
+def test_the_fleet_table_carries_the_conditions():
+    from casadi_sins.studies.batch import row_from_report
+
+    data = {"unit_id": None, "warnings": [], "parameters": [],
+            "conditions": {"date": "2024-02-03", "temperature_c": 22.5, "unit_id": "SN-7", "bench": "T2"}}
+    row = row_from_report(data, "runs/u7.toml", "ok")
+    assert row["unit_id"] == "SN-7" and row["recorded"] == "2024-02-03" and row["temperature_c"] == 22.5
+    assert row["bench"] == "T2"

@@ -90,7 +90,11 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
     z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress)
     if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
         raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
-    if not stats["success"]:
+    if not stats["success"] and stalled(stats):
+        progress and progress(f"nlp: Ipopt's objective changed by less than {STALL_CHANGE:g} (relative) over its last "
+                              f"{STALL_ITERATIONS} iterations: a flat valley of a misfit outside the model; the "
+                              "generalised least squares takes it from there")
+    elif not stats["success"]:
         # a rank deficiency is the likelier cause: name it
         check_rank(np.asarray(graph.jacobian(z)[1]), graph.variable_names())
         raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} after {stats['iter_count']} "
@@ -99,6 +103,24 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
                                     use_rotation_steps, progress)
     fit.ipopt_stats = stats
     return fit
+
+
+#: Ipopt at its iteration cap has converged for our purpose when the objective moved less than this (relative)
+#: over its last iterations: a large misfit outside the model makes Gauss-Newton creep along a flat valley (a
+#: hand-turned MEMS session), and the generalised least squares after it checks its own convergence.
+STALL_CHANGE = 1e-6
+STALL_ITERATIONS = 20
+
+
+def stalled(stats: dict) -> bool:
+    """Whether Ipopt stopped at its iteration cap with a stalled objective (see :data:`STALL_CHANGE`)."""
+    if stats.get("return_status") != "Maximum_Iterations_Exceeded":
+        return False
+    objective = np.asarray((stats.get("iterations") or {}).get("obj") or [], dtype=float)
+    if len(objective) <= STALL_ITERATIONS:
+        return False
+    recent = objective[-STALL_ITERATIONS - 1:]
+    return bool(np.all(np.isfinite(recent)) and np.ptp(recent) <= STALL_CHANGE * abs(recent[-1]))
 
 
 def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, model: SensorNoise,

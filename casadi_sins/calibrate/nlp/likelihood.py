@@ -17,10 +17,12 @@ from ...noise.kalman import NoiseSystem
 from ...noise.observations import ObservationKind, ObservationTable
 from ...noise.plan import NoisePlan
 
-#: Search ranges of the unmodelled terms: acceleration (m/s^2), rate (rad/s).
+#: Search ranges of the unmodelled terms: acceleration (m/s^2), rate (rad/s), for a navigation-grade unit; the
+#: tops grow to :data:`UNMODELLED_HEADROOM` times the fit's own residuals when those are larger (a MEMS unit).
 UNMODELLED_ACCELERATION_RANGE = (1e-8, 1e-2)
 UNMODELLED_RATE_RANGE = (1e-12, 1e-5)
 UNMODELLED_STEP_RANGE = (1e-7, 1.0)
+UNMODELLED_HEADROOM = 100.0
 
 
 def restricted_likelihood(system: NoiseSystem, columns: np.ndarray, model: SensorNoise) -> float:
@@ -66,8 +68,9 @@ def estimate_terms(system: NoiseSystem, columns: np.ndarray, base: SensorNoise,
 
 
 def estimate_unmodelled(observations: ObservationTable, residuals: np.ndarray, jacobian: np.ndarray,
-                        system: NoiseSystem, noise: SensorNoise, use_rotation_steps: bool) -> SensorNoise:
-    """Variances of the errors outside the model, by restricted maximum likelihood at a fit.
+                        system: NoiseSystem, noise: SensorNoise, use_rotation_steps: bool) -> tuple[SensorNoise, dict]:
+    """Variances of the errors outside the model, by restricted maximum likelihood at a fit, and the tops of
+    their search ranges (field -> SI value).
 
     The terms (an acceleration constant in each static segment, a rate on each static gyro mean, a
     velocity error at each rotation when its step is used) take the share of the misfit that the data
@@ -79,11 +82,14 @@ def estimate_unmodelled(observations: ObservationTable, residuals: np.ndarray, j
     gyro = observations.rows_of(ObservationKind.GYRO_MEAN)
     start_acc = np.sqrt(np.mean(r[velocity] ** 2)) / 100.0  # a slope of the residuals' size per 100 s
     start_rate = np.sqrt(np.mean(r[gyro] ** 2)) if gyro.any() else 1e-9
-    terms = {"unmodelled_acceleration": (start_acc, *UNMODELLED_ACCELERATION_RANGE),
-             "unmodelled_rate": (start_rate, *UNMODELLED_RATE_RANGE)}
+    low_acc, high_acc = UNMODELLED_ACCELERATION_RANGE
+    low_rate, high_rate = UNMODELLED_RATE_RANGE
+    terms = {"unmodelled_acceleration": (start_acc, low_acc, max(high_acc, UNMODELLED_HEADROOM * start_acc)),
+             "unmodelled_rate": (start_rate, low_rate, max(high_rate, UNMODELLED_HEADROOM * start_rate))}
     if use_rotation_steps:
         terms["unmodelled_step"] = (1e-4, *UNMODELLED_STEP_RANGE)
-    return estimate_terms(system, np.column_stack([r, jacobian]), noise, terms)
+    tops = {name: high for name, (_, _, high) in terms.items()}
+    return estimate_terms(system, np.column_stack([r, jacobian]), noise, terms), tops
 
 
 def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: NoiseSystem,
@@ -105,14 +111,17 @@ def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Noise
     return estimate_terms(system, columns, model, terms)
 
 
-def unmodelled_at_bounds(noise: SensorNoise) -> list[str]:
-    """Warnings for unmodelled terms that reached the top of their search range: the errors outside the model
-    are larger than it can represent, and the sigma may not cover them."""
+def unmodelled_at_bounds(noise: SensorNoise, tops: dict | None = None) -> list[str]:
+    """Warnings for unmodelled terms that reached the top of their search range (``tops``, field -> SI, from
+    :func:`estimate_unmodelled`; default the navigation-grade ranges): the errors outside the model are larger
+    than it can represent, and the sigma may not cover them."""
+    tops = tops or {}
     out = []
     for name, value, (_, high), unit, scale in (
             ("unmodelled acceleration", noise.unmodelled_acceleration, UNMODELLED_ACCELERATION_RANGE, "m/s^2", 1.0),
             ("unmodelled rate", noise.unmodelled_rate, UNMODELLED_RATE_RANGE, "rad/s", 1.0),
             ("unmodelled step", noise.unmodelled_step, UNMODELLED_STEP_RANGE, "m/s", 1.0)):
+        high = tops.get(name.replace(" ", "_"), high)
         if value >= 0.9 * high:
             out.append(f"the {name} reached its bound ({value / scale:.3g} of at most {high:g} {unit}): the errors "
                        "outside the model are beyond what it can represent; this table is not to be trusted")

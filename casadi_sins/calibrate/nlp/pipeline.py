@@ -294,7 +294,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
     _evidence(run, graph, fit, "the misfit beyond the noise model")
     # errors outside the model: an unmodelled acceleration per static segment, an unmodelled rate per gyro
     # mean (and a velocity error per rotation), with variances from the residuals, and solve again
-    unmodelled = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,
+    unmodelled, tops = estimate_unmodelled(graph.observations, fit.residuals, fit.jacobian, fit.system, fit.noise,
                                      fit.use_rotation_steps)
     run.say(f"residuals exceed the noise model: unmodelled acceleration {unmodelled.unmodelled_acceleration / UG:.3g} "
             f"ug per static segment, unmodelled rate {unmodelled.unmodelled_rate / DEG_PER_H:.3g} deg/h per gyro mean, "
@@ -311,7 +311,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
         if c.name in final else "") for c in first]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
-    run.warnings += unmodelled_at_bounds(unmodelled)
+    run.warnings += unmodelled_at_bounds(unmodelled, tops)
     run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
                         "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "

@@ -166,11 +166,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     _add_modulation(sub)
     add_production_commands(sub)
     add_thermal_command(sub)
+    add_import_parser(sub)
     for name in LONG_COMMANDS:
         add_log_options(sub.choices[name])
     for action in sub._choices_actions:  # each command's --help starts with its one-line description
         sub.choices[action.dest].description = sub.choices[action.dest].description or action.help
-    add_import_parser(sub)
     return parser
 
 

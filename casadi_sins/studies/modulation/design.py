@@ -156,9 +156,36 @@ def step_tables(req: Request, site: Site, axes: tuple[str, ...], root: np.ndarra
     return Tables(chosen, gyro, first, accel, g0 @ root, a0 @ root, np.array([AXIS_BIT[a] for a, _ in chosen]))
 
 
-def proxy(seqs: np.ndarray, tables: Tables, req: Request, site: Site, dwell0: float = 0.0) -> np.ndarray:
-    """Proxy of the largest horizontal position error (m) of candidate sequences (B, N) of choice indices:
-    ``sqrt((2 R tilt_h)^2 + (R H drift_h / 2)^2 + (R H cos L drift_U / 2)^2)`` weighted by the errors;
+def responses(req: Request, site: Site, points: int = 48) -> np.ndarray:
+    """(2, T, 4, 3) response of (v_E, v_N, north, east) at ``T`` times over the run to a unit constant tilt
+    (first) and a unit constant navigation-frame gyro drift (second), E N U: the static navigation error
+    model of :func:`model.navigation_block` (Schuler, Earth-rate and Foucault loops), through
+    ``expm([[F, E], [0, 0]] t)`` (the drift enters ``phi' = -drift``)."""
+    from ...core.linalg import expm
+
+    f = M.navigation_block(site)[:M.N_NAV, :M.N_NAV]
+    big = np.zeros((M.N_NAV + 3, M.N_NAV + 3))
+    big[:M.N_NAV, :M.N_NAV] = f
+    big[0:3, M.N_NAV:] = -np.eye(3)
+    scale = np.array([1.0, 1.0, *M.to_metres(site)])[:, None]
+    schuler = math.pi * math.sqrt(mean_radius(site) / site.g)
+    times = np.unique(np.append(np.linspace(0.0, req.hours * 3600.0, points + 1)[1:], schuler))
+    times = times[times <= req.hours * 3600.0]
+    if req.criterion == "final":
+        times = times[-1:]
+    out = np.zeros((2, len(times), 4, 3))
+    for k, t in enumerate(times):
+        ex = expm(big * t)
+        out[0, k] = ex[3:7, 0:3] * scale
+        out[1, k] = ex[3:7, M.N_NAV:] * scale
+    return out
+
+
+def proxy(seqs: np.ndarray, tables: Tables, req: Request, site: Site, response: np.ndarray,
+          dwell0: float = 0.0) -> np.ndarray:
+    """Proxy of the criterion of candidate sequences (B, N) of choice indices: the error the period-mean
+    tilt and the residual drift alone would cause (``response`` from :func:`responses`), its largest over
+    the run (its value at the end for ``final``), summed over the errors by their covariance (m or m/s);
     ``inf`` for a sequence that does not return to its start."""
     b, n = seqs.shape
     length = req.step_s
@@ -175,15 +202,16 @@ def proxy(seqs: np.ndarray, tables: Tables, req: Request, site: Site, dwell0: fl
     period = n * length
     tot += dwell0 * dwell0 / 2 * tables.g0 + dwell0 * period * tables.g0
     span = period + dwell0
-    theta, acc = tot / span, (asum + dwell0 * tables.a0) / span
-    tilt_e = -theta[:, 0] + acc[:, 1] / site.g
-    tilt_n = -theta[:, 1] - acc[:, 0] / site.g
+    tilt = -tot / span
+    acc = (asum + dwell0 * tables.a0) / span
+    tilt[:, 0] += acc[:, 1] / site.g
+    tilt[:, 1] -= acc[:, 0] / site.g
     drift = gsum / period
-    r, h = mean_radius(site), req.hours * 3600.0
-    score = (4 * r * r * (np.sum(tilt_e**2, -1) + np.sum(tilt_n**2, -1))
-             + (r * h / 2) ** 2 * (np.sum(drift[:, 0] ** 2, -1) + np.sum(drift[:, 1] ** 2, -1)
-                                   + math.cos(site.latitude) ** 2 * np.sum(drift[:, 2] ** 2, -1)))
-    return np.where(att == 0, np.sqrt(score), np.inf)
+    rows = slice(0, 2) if req.criterion == "velocity" else slice(2, 4)
+    err = (np.einsum("tij,bjk->btik", response[0][:, rows], tilt)
+           + np.einsum("tij,bjk->btik", response[1][:, rows], drift))
+    value = np.sqrt(np.sum(err**2, axis=(2, 3))).max(axis=1)
+    return np.where(att == 0, value, np.inf)
 
 
 def neighbours(seq: np.ndarray, n_choices: int) -> np.ndarray:

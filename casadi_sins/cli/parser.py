@@ -10,6 +10,7 @@ from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_ex
                        cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
+from .scheme_design import add_design_command
 
 
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
@@ -147,6 +148,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.set_defaults(func=cmd_demo)
     _add_modulation(sub)
     add_production_commands(sub)
+    add_design_command(sub)
     return parser
 
 

@@ -208,9 +208,11 @@ def proxy(seqs: np.ndarray, tables: Tables, req: Request, site: Site, response: 
     tilt[:, 1] -= acc[:, 0] / site.g
     drift = gsum / period
     rows = slice(0, 2) if req.criterion == "velocity" else slice(2, 4)
-    err = (np.einsum("tij,bjk->btik", response[0][:, rows], tilt)
-           + np.einsum("tij,bjk->btik", response[1][:, rows], drift))
-    value = np.sqrt(np.sum(err**2, axis=(2, 3))).max(axis=1)
+    x = np.concatenate([tilt, drift], axis=1)  # (B, 6, K)
+    gram = (x @ x.transpose(0, 2, 1)).reshape(b, 36)  # sum over the errors of x x^T
+    r = np.concatenate([response[0][:, rows], response[1][:, rows]], axis=2)  # (T, 2, 6)
+    q = (r.transpose(0, 2, 1) @ r).reshape(len(r), 36)  # |r x|^2 = tr(r^T r x x^T)
+    value = np.sqrt(np.clip(gram @ q.T, 0.0, None)).max(axis=1)
     return np.where(att == 0, value, np.inf)
 
 

@@ -85,19 +85,24 @@ class StepPropagator:
         self.args = (site, M.navigation_block(site), sources.gyro_arw, sources.accel_vrw, step_deg)
         self.noisy = bool(np.any(sources.gyro_arw > 0) or np.any(sources.accel_vrw > 0))
         self.steps, self.starts, self.bits = {}, {}, [AXIS_BIT[a] for a, _ in choices(axes)]
-        for att in range(4):
-            for c, (axis, sense) in enumerate(choices(axes)):
-                turn = Piece(0.0, math.pi / req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1], sense * req.rate)
-                stop = Piece(0.0, req.stop, attitude(att ^ self.bits[c]))
-                self.steps[(att, c)] = ((discretise(turn, *self.args), turn.duration),
-                                        (discretise(stop, *self.args), stop.duration))
         self.scale = np.array([1.0, 1.0, *M.to_metres(site)])[:, None]
+
+    def _step(self, att: int, c: int) -> tuple:
+        """The turn and the stop of choice ``c`` from attitude ``att``, discretised on first use."""
+        if (att, c) not in self.steps:
+            axis, sense = choices(self.axes)[c]
+            turn = Piece(0.0, math.pi / self.req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1],
+                         sense * self.req.rate)
+            stop = Piece(0.0, self.req.stop, attitude(att ^ self.bits[c]))
+            self.steps[(att, c)] = ((discretise(turn, *self.args), turn.duration),
+                                    (discretise(stop, *self.args), stop.duration))
+        return self.steps[(att, c)]
 
     def _period(self, seq) -> list:
         """``((Phi, Q_g, Q_a), duration)`` of the pieces of one period from the start attitude."""
         out, att = [], 0
         for c in seq:
-            out.extend(self.steps[(att, c)])
+            out.extend(self._step(att, c))
             att ^= self.bits[c]
         return out
 

@@ -257,10 +257,12 @@ SECTIONS = {"guan": section_guan, "latitude": section_latitude, "dwell": section
             "timing": section_timing, "montecarlo": section_montecarlo}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the sections asked for (all by default) and write their files."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sections", nargs="*", choices=[[], *SECTIONS], help="sections to run (default all)")
+def main(argv: list[str] | None = None, sections: dict | None = None, doc: str | None = None) -> int:
+    """Run the sections asked for (all by default; of ``sections``, default this script's) and write their
+    files."""
+    sections = SECTIONS if sections is None else sections
+    parser = argparse.ArgumentParser(description=(doc or __doc__).split("\n\n")[0])
+    parser.add_argument("sections", nargs="*", choices=[[], *sections], help="sections to run (default all)")
     parser.add_argument("--out", default="results/modulation", help="output folder, relative to the repository "
                         "(default results/modulation)")
     args = parser.parse_args(argv)
@@ -268,9 +270,9 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     sheets = {"guan": load_sheet("problems/guan2023-table1.toml"), "yr": load_sheet("problems/yu-ruan2014-sim.toml")}
     with single_threaded():
-        for name in args.sections or SECTIONS:
+        for name in args.sections or sections:
             start = time.process_time()
-            written = write_files(SECTIONS[name](out, sheets))
+            written = write_files(sections[name](out, sheets))
             print(f"{name}: {time.process_time() - start:.1f} s CPU, wrote {', '.join(str(p) for p in written)}",
                   flush=True)
     return 0

@@ -8,7 +8,6 @@ Sections (all by default): phase, factor, design.  Writes ``results/modulation/*
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 import sys
@@ -17,17 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_modulation import GUAN_LAT, NMI, ROOT, YR_LAT, _flip, _sequence_scheme, scheme, site, table
+from bench_modulation import GUAN_LAT, NMI, YR_LAT, _flip, _sequence_scheme, scheme, site, table
+from bench_modulation import main as bench_main
 from casadi_sins.core import units
-from casadi_sins.core.files import write_files
-from casadi_sins.core.threads import single_threaded
 from casadi_sins.studies.modulation import model as M
 from casadi_sins.studies.modulation.analysis import horizontal, run_scheme
 from casadi_sins.studies.modulation.covariance import propagate
 from casadi_sins.studies.modulation.design import Request
 from casadi_sins.studies.modulation.design_report import comparison
 from casadi_sins.studies.modulation.designer import design
-from casadi_sins.studies.modulation.sources import load_sheet
 
 
 def section_phase(out: Path, sheets: dict) -> dict:
@@ -101,23 +98,5 @@ def section_design(out: Path, sheets: dict) -> dict:
 SECTIONS = {"phase": section_phase, "factor": section_factor, "design": section_design}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the sections asked for (all by default) and write their files."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sections", nargs="*", choices=[[], *SECTIONS], help="sections to run (default all)")
-    parser.add_argument("--out", default="results/modulation", help="output folder (default results/modulation)")
-    args = parser.parse_args(argv)
-    os.chdir(ROOT)
-    out = Path(args.out)
-    sheets = {"guan": load_sheet("problems/guan2023-table1.toml"), "yr": load_sheet("problems/yu-ruan2014-sim.toml")}
-    with single_threaded():
-        for name in args.sections or SECTIONS:
-            start = time.process_time()
-            written = write_files(SECTIONS[name](out, sheets))
-            print(f"{name}: {time.process_time() - start:.1f} s CPU, wrote {', '.join(str(p) for p in written)}",
-                  flush=True)
-    return 0
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(bench_main(sections=SECTIONS, doc=__doc__))

@@ -38,9 +38,11 @@ def scheme_toml(scheme: Scheme) -> str:
                   f"rate_deg_s = {round(step.rate / units.DEG, 9)!r}", f"dwell_s = {step.dwell!r}"]
     text = "\n".join(lines) + "\n"
     back = parse_scheme(tomllib.loads(text), "scheme.toml")
-    assert len(back.steps) == len(scheme.steps) and all(
+    same = len(back.steps) == len(scheme.steps) and all(
         a.axis == b.axis and math.isclose(a.angle, b.angle) and math.isclose(a.dwell, b.dwell)
-        for a, b in zip(back.steps, scheme.steps)), "scheme.toml does not read back as the design"
+        for a, b in zip(back.steps, scheme.steps)) and math.isclose(back.initial_dwell, scheme.initial_dwell)
+    if not same:
+        raise RuntimeError("scheme.toml does not read back as the design")
     return text
 
 

@@ -187,6 +187,7 @@ def _search(spaces: list[_Space], req: Request, site: Site, starts: int,
     pool, scored = [], 0
     for space in spaces:
         def score(s, space=space):
+            """The proxy of sequences of this space."""
             return space.score(s, req, site)
 
         values = score(space.starts)
@@ -275,6 +276,7 @@ def design(req: Request, sources: Sources, site: Site, samples: int = 20000, sta
     props: dict = {"site": site}
 
     def confirm_all(cands: list[Candidate]) -> list[Candidate]:
+        """Confirm candidates by the full propagation (each once)."""
         return _confirm(cands, props, sources, req, done, progress, t0)
 
     pool, scored = _search(spaces, req, site, starts, progress)

@@ -119,8 +119,8 @@ def section_dwell(out: Path, sheets: dict) -> dict:
 
 def section_yuruan(out: Path, sheets: dict) -> dict:
     """Yu and Ruan 2014: common against improved, with the sheet's initial errors and aligned."""
-    names = ["yu-ruan2014-common", "yu-ruan2014-improved", "yu-ruan2014-common-8", "yu-ruan2014-improved-8",
-             "yu-ruan2014-reversal-8"]
+    names = ["yu-ruan2014-common", "yu-ruan2014-improved", "yu-ruan2014-improved-reconstructed",
+             "yu-ruan2014-common-8", "yu-ruan2014-improved-8", "yu-ruan2014-reversal-8"]
     rows, files = [], {}
     for initial in ("sheet", "aligned"):
         doc, results = analyse([scheme(n) for n in names], sheets["yr"], site(YR_LAT), 24.0,
@@ -169,12 +169,16 @@ def section_candidates(out: Path, sheets: dict) -> dict:
     for label, s58 in fifth.items():
         cands[f"8: {label}"] = f"{first} {s58}"
         cands[f"16: {label}; 9-16 = 1-8 reversed in direction"] = f"{first} {s58} {_flip(first + ' ' + s58)}"
+    published = "z+ y- z+ y- y- z+ y- z+"
+    cands["16: published (PSINS): 9-16 = 1-8 with the two axes swapped"] = (
+        f"{published} {published.replace('z', 'Y').replace('y', 'z').replace('Y', 'y')}")
     y8 = "z+ y+ z- y- y+ z+ y- z-"
     cands["common (Yuan) 8"] = y8
     cands["common (Yuan) 16"] = f"{y8} {_flip(y8)}"
     rows = [_candidate_row(label, seq, sheets["yr"], site(YR_LAT)) for label, seq in cands.items()]
     return table(rows, out / "yu-ruan2014-candidates",
-                 "Reconstructing the improved scheme: candidate orders 5-8 and 9-16 (Yu-Ruan sheet, 45.77 deg)",
+                 "Reconstructing the improved scheme: candidate orders 5-8 and 9-16 (Yu-Ruan sheet, 45.77 deg), "
+                 "and the published order",
                  "drift: the constant navigation-frame gyro drift one period leaves of the sheet's errors (all +1 "
                  "value); bias leak: the largest share of a gyro bias left as constant drift (turns' sin a terms); "
                  "p-p: peak-to-peak of the integrated navigation-frame gyro error over two periods (the paper's Fig. 6).")
@@ -257,10 +261,12 @@ SECTIONS = {"guan": section_guan, "latitude": section_latitude, "dwell": section
             "timing": section_timing, "montecarlo": section_montecarlo}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the sections asked for (all by default) and write their files."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sections", nargs="*", choices=[[], *SECTIONS], help="sections to run (default all)")
+def main(argv: list[str] | None = None, sections: dict | None = None, doc: str | None = None) -> int:
+    """Run the sections asked for (all by default; of ``sections``, default this script's) and write their
+    files."""
+    sections = SECTIONS if sections is None else sections
+    parser = argparse.ArgumentParser(description=(doc or __doc__).split("\n\n")[0])
+    parser.add_argument("sections", nargs="*", choices=[[], *sections], help="sections to run (default all)")
     parser.add_argument("--out", default="results/modulation", help="output folder, relative to the repository "
                         "(default results/modulation)")
     args = parser.parse_args(argv)
@@ -268,9 +274,9 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     sheets = {"guan": load_sheet("problems/guan2023-table1.toml"), "yr": load_sheet("problems/yu-ruan2014-sim.toml")}
     with single_threaded():
-        for name in args.sections or SECTIONS:
+        for name in args.sections or sections:
             start = time.process_time()
-            written = write_files(SECTIONS[name](out, sheets))
+            written = write_files(sections[name](out, sheets))
             print(f"{name}: {time.process_time() - start:.1f} s CPU, wrote {', '.join(str(p) for p in written)}",
                   flush=True)
     return 0

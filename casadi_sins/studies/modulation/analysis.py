@@ -26,6 +26,7 @@ from .covariance import Propagation, propagate
 from .residual import equivalent_drift
 from .schemes import CLOSURE_TOL, Scheme, closure_error, load_scheme
 from .sources import GROUPS, NOISES, Sources
+from .tilt import mean_tilt_table
 
 #: The reference of every ratio: an IMU that never turns.
 STRAPDOWN = Scheme("strapdown", (), np.eye(3), description="reference: the IMU never turns (x E, y N, z U)",
@@ -175,6 +176,7 @@ def summarise(result: SchemeResult, reference: SchemeResult, sources: Sources, s
         "by_parameter": by_parameter,
         "not_averaged_away": not_averaged,
         "residual_drift_deg_h_per_sigma": residual_drift(scheme, sources, site),
+        "period_mean_tilt": mean_tilt_table(scheme, sources, site),
         "deterministic_plus_one_sigma": {
             "max_horizontal_position_error_m": round(_max(np.hypot(mean[:, 2], mean[:, 3])), 3),
             "max_velocity_error_mps": round(_max(np.hypot(mean[:, 0], mean[:, 1])), 5)},
@@ -226,6 +228,10 @@ def analyse(schemes: list[Scheme], sources: Sources, site: Site, hours: float, s
             "not_averaged_away": "sensor error terms whose contribution is at least half their strapdown one "
                                  "and at least 1 % of the scheme's total: the ones to calibrate best",
             "residual_drift_deg_h_per_sigma": "constant E, N, U gyro drift one period leaves of 1 sigma",
+            "period_mean_tilt": "mean attitude error (E, N, U, arcsec) over the first period of 1 sigma of each "
+                                "term (accelerometers as the equivalent tilt df/g), and 2 R x its horizontal part "
+                                "(m): the Schuler swing it drives; the total 2 R sqrt(M_h P M_h^T) predicts the "
+                                "covariance maximum until a residual drift ramps past it (None: strapdown)",
             "curves": "block maxima (envelope) of the 1-sigma curves, at most 600 points",
             "deterministic_plus_one_sigma": "noise-free error with every constant source at +1 sigma "
                                             "(the papers' fixed-value simulations; correlations ignored)",

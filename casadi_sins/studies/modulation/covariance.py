@@ -160,7 +160,7 @@ def check_run(scheme: Scheme, site: Site, hours: float, max_step_s: float) -> No
 
 
 def propagate(scheme: Scheme, site: Site, hours: float, gyro_arw, accel_vrw, step_deg: float = 5.0,
-              max_step_s: float = 60.0) -> Propagation:
+              max_step_s: float = 60.0, cache: dict | None = None) -> Propagation:
     """Propagate the transition matrix and the noise covariances along ``scheme`` for ``hours``.
 
     Parameters
@@ -171,12 +171,15 @@ def propagate(scheme: Scheme, site: Site, hours: float, gyro_arw, accel_vrw, ste
         Largest integration sub-step of a turn, deg (at least :data:`MIN_STEPS_PER_90` per 90 deg).
     max_step_s : float
         Largest output interval in a dwell, s.
+    cache : dict, optional
+        The discretised pieces, shared between calls of the same site, noise and ``step_deg`` (schemes
+        made of the same turns, as a design search's candidates, then cost only their products).
     """
     check_turn_step(step_deg, "turn integration step")
     check_run(scheme, site, hours, max_step_s)
     nav = M.navigation_block(site)
     pieces = output_pieces(scheme_pieces(scheme, hours * 3600.0), max_step_s)
-    cache: dict[tuple, tuple] = {}
+    cache = {} if cache is None else cache
     n, t_out = M.N_STATE, len(pieces) + 1
     sens = np.zeros((t_out, 4, n))
     noise = {"gyro noise": np.zeros((t_out, 4, 4)), "accel noise": np.zeros((t_out, 4, 4))}

@@ -70,10 +70,27 @@ def _scheme_section(name: str, s: dict) -> list[str]:
               "first: " + (", ".join(f"{v['name']} ({_fmt(v['max_position_error_m'])} m, "
                                      f"{_fmt(v['ratio_to_strapdown'], 3)} x strapdown)" for v in kept)
                            if kept else "none") + "."]
+    lines += _tilt_lines(s.get("period_mean_tilt"))
     drift = {k: v for k, v in s["residual_drift_deg_h_per_sigma"].items() if max(map(abs, v)) > 1e-7}
     if drift:
         lines += ["", "Residual constant drift one period leaves of 1 sigma of each gyro term (deg/h, E N U):", ""]
         lines += [f"- {k}: {', '.join(f'{x:+.3g}' for x in v)}" for k, v in drift.items()]
+    return lines
+
+
+def _tilt_lines(tilt: dict | None) -> list[str]:
+    """The period-mean tilt of one scheme, largest horizontal swing first (terms of 0.1 % of the total or more)."""
+    if not tilt:
+        return []
+    total = tilt["two_r_horizontal_total_m"]
+    terms = sorted(tilt["terms"].items(), key=lambda kv: -kv[1]["two_r_horizontal_m"])
+    lines = ["", f"Period-mean tilt (mean attitude error over the first period, 1 sigma): it swings the position by "
+             f"about 2 R x its horizontal part; all terms together {_fmt(total)} m.", "",
+             "| term | tilt E, N, U (arcsec) | 2 R x horizontal (m) |", "| --- | --- | ---: |"]
+    for name, v in terms:
+        if v["two_r_horizontal_m"] >= 1e-3 * max(total, 1e-9):
+            lines.append(f"| {name} | {', '.join(f'{x:+.3g}' for x in v['tilt_arcsec'])} | "
+                         f"{_fmt(v['two_r_horizontal_m'])} |")
     return lines
 
 

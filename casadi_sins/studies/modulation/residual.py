@@ -52,16 +52,25 @@ def _integrand(piece: Piece, site: Site, tau: np.ndarray, part: str) -> np.ndarr
     return c @ j
 
 
+def nav_frame_error(piece: Piece, site: Site, tau: np.ndarray, part: str = "total") -> np.ndarray:
+    """``C(t) d(d_w)/dx`` (N, 3, 24) at times ``tau`` into a piece: the gyro error in the navigation frame."""
+    return _integrand(piece, site, np.asarray(tau, dtype=float), part)
+
+
+def quadrature(piece: Piece, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights over ``[0, length]`` of a piece: 6-point Gauss-Legendre on at most 5 deg of a turn."""
+    n = 1 if piece.axis is None else max(1, math.ceil(abs(piece.rate) * length / math.radians(5.0)))
+    edges = np.linspace(0.0, length, n + 1)
+    a, b = edges[:-1, None], edges[1:, None]
+    return ((a + b) / 2 + (b - a) / 2 * _GX[None]).ravel(), ((b - a) / 2 * _GW[None]).ravel()
+
+
 def piece_integral(piece: Piece, site: Site, part: str = "total", upto: float | None = None) -> np.ndarray:
     """``int_0^upto C(t) d(d_w)/dx dt`` over a piece (3, 24), s * (rad/s per unit state)."""
     length = piece.duration if upto is None else upto
     if length <= 0:
         return np.zeros((3, M.N_STATE - M.N_NAV))
-    n = 1 if piece.axis is None else max(1, math.ceil(abs(piece.rate) * length / math.radians(5.0)))
-    edges = np.linspace(0.0, length, n + 1)
-    a, b = edges[:-1, None], edges[1:, None]
-    tau = ((a + b) / 2 + (b - a) / 2 * _GX[None]).ravel()
-    weights = ((b - a) / 2 * _GW[None]).ravel()
+    tau, weights = quadrature(piece, length)
     return np.einsum("n,nij->ij", weights, _integrand(piece, site, tau, part))
 
 

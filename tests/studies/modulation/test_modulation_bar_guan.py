@@ -60,8 +60,9 @@ def test_dual_axis_gyro_biases_are_negligible_against_the_total(runs):
 
 
 @pytest.mark.xfail(strict=True, reason="measured 15.2 m with the 16-position scheme at 20 deg/s and 45 s per stop "
-                   "(the only timing in the two papers); the bound term scales with the stop length (7.7 m at 20 s, "
-                   "see docs/modulation.md) and Guan et al. do not state theirs")
+                   "(the only timing in the two papers), navigation starting with a turn; the bound term scales with the "
+                   "stop length (7.7 m at 20 s) and with the start phase (7.7 m when navigation starts half a "
+                   "stop before the first turn), see docs/modulation.md; Guan et al. state neither")
 def test_dual_axis_gyro_biases_a_few_metres(runs):
     """Fig. 4: 'only a few metres' (bar: <= 10 m)."""
     assert lon_max(runs["dual-axis-16"].by_source["gyro bias"]) <= 10.0

@@ -30,19 +30,27 @@ def test_improved_position_error_within_2x_of_0_4_nmi(det):
     assert 0.2 <= det["yu-ruan2014-improved"][0] <= 0.8
 
 
+@pytest.mark.xfail(strict=True, reason="measured 0.205 m/s (common 0.416): the ratio 0.49 is the paper's (0.5 against "
+                   "1 m/s), the absolute level about 0.4 of it, like the position (docs/modulation.md)")
 def test_improved_velocity_error_within_2x_of_0_5_mps(det):
     assert 0.25 <= det["yu-ruan2014-improved"][1] <= 1.0
 
 
-@pytest.mark.xfail(strict=True, reason="measured 0.350 nmi for the reconstructed common scheme, the same as the "
-                   "improved one: both cancel every constant term but scale x Earth rate (docs/modulation.md)")
+@pytest.mark.xfail(strict=True, reason="measured 0.350 nmi for the common scheme (0.217 improved): the ratio is "
+                   "the paper's, the absolute level about half of it: alignment, run length, start phase and sign "
+                   "pattern ruled out; the errors at twice their stated size give 0.70/0.43 nmi (docs/modulation.md)")
 def test_common_position_error_within_2x_of_0_74_nmi(det):
     assert 0.37 <= det["yu-ruan2014-common"][0] <= 1.48
 
 
-@pytest.mark.xfail(strict=True, reason="measured ratio 1.00 (deterministic and covariance alike, docs/modulation.md)")
 def test_improved_over_common_at_most_0_7(det):
+    """The bar: the published (PSINS) order of the improved scheme, 0.62 here (velocity 0.49, the paper about 0.5)."""
     assert det["yu-ruan2014-improved"][0] / det["yu-ruan2014-common"][0] <= 0.7
+
+
+def test_improved_over_common_velocity_about_one_half(det):
+    """The paper: improved 0.5 m/s against common 1 m/s."""
+    assert 0.35 <= det["yu-ruan2014-improved"][1] / det["yu-ruan2014-common"][1] <= 0.65
 
 
 def test_improved_scheme_oscillates_less(yu_ruan_sheet, yu_ruan_site):

@@ -21,8 +21,8 @@ def step(axis="z", angle=180.0, rate=10.0, dwell=30.0):
     return raw
 
 
-def test_ten_schemes_are_shipped():
-    assert len(list(SCHEMES.glob("*.toml"))) == 10
+def test_twelve_schemes_are_shipped():
+    assert len(list(SCHEMES.glob("*.toml"))) == 12
 
 
 @pytest.mark.parametrize("path", sorted(SCHEMES.glob("*.toml")), ids=lambda p: p.stem)

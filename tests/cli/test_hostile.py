@@ -152,8 +152,10 @@ def test_a_full_disk_leaves_nothing_behind_and_names_the_file(recording, tmp_pat
     out = tmp_path / "cmp"
     done = _run_cli(["compare", str(recording), "--out", str(out)], limit_file_bytes=20_000)
     _, err = done.communicate(timeout=600)
-    assert done.returncode == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    assert "File too large" in err and str(out) in err
+    # on a cold compile cache the full disk also stops the compiler: its one note ("casadi-sins: ...") may precede
+    errors = [line for line in err.strip().splitlines() if not line.startswith("casadi-sins: ")]
+    assert done.returncode == 2 and "Traceback" not in err and len(errors) == 1, err
+    assert "File too large" in errors[0] and str(out) in errors[0]
     assert not out.exists() or not any(out.rglob("*"))
 
 

@@ -16,15 +16,19 @@ import traceback
 
 from ..calibrate.result import CalibrationError
 from ..core.errors import InputError, OutputError
-from ..core.files import check_writable
+from ..core.files import check_writable, gathered_writes
+from ..core.guard import guarded_inputs
 from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
+from .inputs import command_inputs
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
 FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
                   "modulate-mc", "apply", "history", "batch"}
+#: Commands that write as they go by design (a resumable ledger); every other one writes all at the end.
+INCREMENTAL_OUTPUTS = {"batch"}
 
 __all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
 
@@ -57,10 +61,11 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     name = f"casadi-sins {args.command}"
     try:
-        with _termination_handled():
+        with _termination_handled(), guarded_inputs(command_inputs(args)):
             if getattr(args, "out", None):
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
-            with single_threaded():
+            with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
+                                     else gathered_writes()):
                 return args.func(args)
     except (InputError, OutputError, CliError, CalibrationError) as exc:
         return _fail(name, one_line(exc, 2000))

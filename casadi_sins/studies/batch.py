@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
 import json
 import math
 import os
+import shlex
 import types
 from pathlib import Path
 from typing import Callable, Sequence
@@ -33,18 +35,24 @@ import pandas as pd
 from ..calibrate import calibrate
 from ..core.errors import InputError
 from ..core.files import safe_stem, write_files
-from ..core.text import one_line
+from ..core.text import one_line, spreadsheet_cell
+from ..core.toml import read_toml
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import table_text
 from ..model.registry import NAMES, natural_scale_of, natural_unit_of, relative_mask
 from ..report.calibration import companion_paths, recording_hash, report_files
+from ..report.provenance import file_sha256
 from ..report.tables import frame_files
 from .parallel import run_all
 
 #: Outlier threshold in robust spreads (see the module docstring).
 OUTLIER_THRESHOLD = 5.0
+#: The key of the unit report (the batch's ledger) holding the SHA-256 of the unit's table as written.
+LEDGER_TABLE_KEY = "table_sha256"
+#: The columns of the fleet tables that carry names (unit ids, paths, messages): no formula in a spreadsheet.
+NAME_COLUMNS = ("unit_id", "recording", "message", "outliers")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,17 +75,23 @@ def file_hash(rec_path) -> str | None:
 
 
 def finished(rec_path, out_dir) -> dict | None:
-    """The report of a unit already calibrated from this very recording, or None."""
+    """The report of a unit already calibrated from this very recording, or None: the report (the ledger)
+    names the recording's SHA-256 as it is now and the SHA-256 of the stored table as it is now (a table
+    changed, truncated or replaced since is calibrated again)."""
     table = unit_table_path(out_dir, rec_path)
     report = companion_paths(table)[0]
-    if not (table.exists() and report.exists()):
+    if not (table.is_file() and report.is_file()):
         return None
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
+        stored = file_sha256(table)
     except (OSError, ValueError, RecursionError):
         return None
-    digest = (data.get("recording") or {}).get("sha256") if isinstance(data, dict) else None
-    return data if digest and digest == file_hash(rec_path) else None
+    if not isinstance(data, dict):
+        return None
+    digest = (data.get("recording") or {}).get("sha256")
+    same_table = data.get(LEDGER_TABLE_KEY) == stored
+    return data if digest and digest == file_hash(rec_path) and same_table else None
 
 
 def row_from_report(data: dict, rec_path, status: str) -> dict:
@@ -101,7 +115,9 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters).encode()}
         files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.name))
-        data = json.loads(files[companion_paths(table)[0]])
+        report = companion_paths(table)[0]
+        data = {**json.loads(files[report]), LEDGER_TABLE_KEY: hashlib.sha256(files[table]).hexdigest()}
+        files[report] = (json.dumps(data, indent=2, default=str) + "\n").encode()
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
         message = one_line(exc, 500) or type(exc).__name__
@@ -109,6 +125,28 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
             message = f"{type(exc).__name__}: {message}"
         return {"row": {"unit_id": Path(rec_path).stem, "recording": str(rec_path), "status": "failed",
                         "warnings": 0, "message": message}, "files": {}}
+
+
+def check_unit_ids(recordings: Sequence) -> None:
+    """Refuse two recordings of one unit id (a recording's ``name``), naming both; a recording whose name
+    cannot be read is judged later, as that unit's failure.
+
+    Raises
+    ------
+    InputError
+        Naming both recordings and the id.
+    """
+    seen: dict[str, str] = {}
+    for path in recordings:
+        try:
+            name = read_toml(path, "recording description").get("name")
+        except InputError:
+            continue
+        if isinstance(name, str) and name in seen:
+            raise InputError(path, f"unit id {one_line(repr(name), 80)} is also that of {seen[name]}: a batch "
+                             "calibrates each unit once (give each recording its unit's own name)")
+        if isinstance(name, str):
+            seen[name] = str(path)
 
 
 def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOptions(), workers: int | None = None,
@@ -123,6 +161,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
         When two recordings have the same file name (their units' files would be one).
     """
     paths = [str(Path(p).resolve()) for p in recordings]
+    check_unit_ids(recordings)
     stems: dict[Path, str] = {}
     for path in paths:
         table = unit_table_path(out_dir, path)
@@ -178,7 +217,7 @@ def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> p
                      "median (SI)": median, "robust spread": robust, "std": float(np.std(natural, ddof=1))
                      if len(values) > 1 else math.nan, "min": float(natural.min()) if len(values) else math.nan,
                      "max": float(natural.max()) if len(values) else math.nan, "median unit sigma": unit_sigma,
-                     "outliers": " ".join(map(str, outliers))})
+                     "outliers": shlex.join(map(str, outliers))})
     return pd.DataFrame(rows)
 
 
@@ -186,10 +225,10 @@ def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
     """The fleet table with an ``outliers`` column: each unit's parameters flagged in the spread."""
     flagged: dict[str, list[str]] = {}
     for name, units in zip(spread["parameter"], spread["outliers"]):
-        for unit in str(units).split():
+        for unit in shlex.split(str(units)):
             flagged.setdefault(unit, []).append(name)
     out = fleet.copy()
-    out.insert(4, "outliers", [" ".join(flagged.get(str(u), [])) for u in out["unit_id"]])
+    out.insert(4, "outliers", [" ".join(flagged.get(str(u), [])) for u in out["unit_id"]])  # parameter names
     return out
 
 
@@ -197,6 +236,7 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
     """``fleet.csv`` (every value and sigma, full precision), ``fleet.md`` (status per unit) and
     ``fleet-spread.csv/.md``."""
     out = Path(out_dir)
+    fleet, spread = _named_cells(fleet), _named_cells(spread)
     failed = int((fleet["status"] == "failed").sum())
     files = frame_files(fleet, out / "fleet", f"{len(fleet)} units, {failed} failed")
     summary = fleet[[c for c in ("unit_id", "status", "warnings", "outliers", "message", "resumed") if c in fleet]]
@@ -206,3 +246,12 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
                              f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
                              "max(robust spread, median unit sigma)", "%.4g"))
     return files
+
+
+def _named_cells(frame: pd.DataFrame) -> pd.DataFrame:
+    """The frame with every name cell (:data:`NAME_COLUMNS`) safe in a spreadsheet (no formula)."""
+    out = frame.copy()
+    for column in NAME_COLUMNS:
+        if column in out:
+            out[column] = [x if not isinstance(x, str) else spreadsheet_cell(x) for x in out[column]]
+    return out

@@ -19,7 +19,7 @@ from ..core.text import one_line
 from ..core.version import software_versions
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
-from ..data.description import description_toml, read_recording
+from ..data.description import MAX_NAME, description_toml, read_recording
 from ..data.problem import load_problem
 from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
@@ -106,6 +106,9 @@ def cmd_segment(args) -> int:
     time_, pulses = read_samples(data, args.rate)
     site = Site(np.radians(args.latitude), args.height, args.gravity)
     name = args.name or Path(args.out).stem
+    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
+        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
+                       f"{one_line(repr(name), 80)}")
     try:
         rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
     except ValueError as exc:

@@ -113,11 +113,18 @@ def read_provenance(table_path: str | Path) -> Provenance:
         raise InputError(report, f"'created' {one_line(repr(data.get('created')), 60)} is not an ISO date") from None
     if date.tzinfo is None:
         date = date.replace(tzinfo=datetime.timezone.utc)
+    if not EARLIEST_YEAR <= date.year < LATEST_YEAR:
+        raise InputError(report, f"'created' {one_line(repr(data.get('created')), 60)} is not a date of a "
+                         f"calibration (years {EARLIEST_YEAR} to {LATEST_YEAR - 1})")
     rec = data.get("recording") if isinstance(data.get("recording"), dict) else {}
     versions = data.get("versions") if isinstance(data.get("versions"), dict) else {}
     return Provenance(table, table_hash, date, _text(data.get("unit_id")), _text(rec.get("name")),
                       _text(rec.get("sha256")), _text(data.get("solver")), _text(data.get("software")),
                       {str(k): str(v) for k, v in versions.items()}, from_report=True)
+
+
+#: Calibration dates outside these years are no calibration's (and 9999-12-31 overflows date arithmetic).
+EARLIEST_YEAR, LATEST_YEAR = 1970, 2200
 
 
 def _text(value) -> str | None:

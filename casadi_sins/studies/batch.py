@@ -161,7 +161,6 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
         When two recordings have the same file name (their units' files would be one).
     """
     paths = [str(Path(p).resolve()) for p in recordings]
-    check_unit_ids(recordings)
     stems: dict[Path, str] = {}
     for path in paths:
         table = unit_table_path(out_dir, path)
@@ -169,6 +168,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
             raise InputError(path, f"its unit's table would be {table.name}, as that of {stems[table]}: give the "
                              "recordings of a batch different file names")
         stems[table] = path
+    check_unit_ids(recordings)
     rows: dict[str, dict] = {}
     pending = []
     for path in paths:

@@ -17,6 +17,7 @@ from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
 from ..core.text import one_line
 from ..core.version import software_versions
+from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
 from ..data.description import MAX_NAME, description_toml, read_recording
@@ -215,6 +216,7 @@ def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
     from tqdm import tqdm
 
+    check_scheduler(args.dask)  # before any work or progress bar
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)

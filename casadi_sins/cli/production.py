@@ -7,6 +7,7 @@ import io
 import time
 from pathlib import Path
 
+from ..studies.parallel import check_scheduler
 from ..core.files import write_files
 from ..core.toml import read_toml
 from ..data.description import read_recording
@@ -76,6 +77,7 @@ def cmd_batch(args) -> int:
     """``batch``: every recording calibrated, the fleet table and the spread across units."""
     from tqdm import tqdm
 
+    check_scheduler(args.dask)  # before any work or progress bar
     options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise)
     t0 = time.perf_counter()
     with tqdm(total=len(args.recordings), desc="batch", unit="unit") as bar:

@@ -60,6 +60,20 @@ def _on_processes(task: Callable, items: list, workers: int):
         yield from pool.imap_unordered(task, items)
 
 
+def check_scheduler(scheduler: str | None) -> None:
+    """Refuse a ``--dask`` value that is neither ``"local"`` nor a scheduler address (before any work).
+
+    Raises
+    ------
+    InputError
+        One line naming the value.
+    """
+    if scheduler and scheduler != "local" and not re.fullmatch(
+            r"(tcp|tls|inproc|ucx|ws|wss)://[^\s/]+(:\d+)?/?|[\w.-]+:\d+", scheduler):
+        raise InputError(None, f"--dask {one_line(repr(scheduler), 80)}: not a scheduler address "
+                         "(tcp://host:8786) nor 'local'")
+
+
 def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
     try:
         from dask.distributed import Client, LocalCluster
@@ -67,10 +81,7 @@ def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
     except ImportError:
         raise InputError(None, f"--dask {one_line(scheduler, 80)}: dask.distributed is not installed: "
                          "pip install 'casadi-sins[cluster]'") from None
-    if scheduler != "local" and not re.fullmatch(r"(tcp|tls|inproc|ucx|ws|wss)://[^\s/]+(:\d+)?/?|[\w.-]+:\d+",
-                                                 scheduler):
-        raise InputError(None, f"--dask {one_line(repr(scheduler), 80)}: not a scheduler address "
-                         "(tcp://host:8786) nor 'local'")
+    check_scheduler(scheduler)
     with _children_ignore_ctrl_c():
         cluster = (LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
                                 dashboard_address=None, silence_logs=logging.CRITICAL)

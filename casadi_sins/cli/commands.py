@@ -104,12 +104,12 @@ def cmd_segment(args) -> int:
     data = Path(args.data)
     if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
         raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
-    time_, pulses = read_samples(data, args.rate)
-    site = Site(np.radians(args.latitude), args.height, args.gravity)
     name = args.name or Path(args.out).stem
     if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
         raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
                        f"{one_line(repr(name), 80)}")
+    time_, pulses = read_samples(data, args.rate)
+    site = Site(np.radians(args.latitude), args.height, args.gravity)
     try:
         rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
     except ValueError as exc:

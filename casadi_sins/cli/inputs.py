@@ -13,10 +13,10 @@ NOT_INPUTS = {"out", "report", "func", "command", "dask", "name", "export", "for
 MAX_LOOK_BYTES = 4_000_000
 
 
-def command_inputs(args) -> list[str]:
+def command_inputs(args) -> list:
     """Every existing file named by ``args`` (output options excepted), and the ``data`` file of each
-    TOML among them (a recording description's CSV, relative to the description)."""
-    found: list[str] = []
+    TOML among them (a recording description's CSV, relative to the description, as ``(path, role)``)."""
+    found: list = []
     for key, value in vars(args).items():
         if key in NOT_INPUTS:
             continue
@@ -34,7 +34,7 @@ def _is_file(path) -> bool:
         return False
 
 
-def _described_data(path: Path) -> list[str]:
+def _described_data(path: Path) -> list[tuple[str, str]]:
     """The ``data`` file a TOML description names, when it is one (else nothing; its reader judges it)."""
     if path.suffix.lower() != ".toml":
         return []
@@ -45,4 +45,4 @@ def _described_data(path: Path) -> list[str]:
     except (OSError, ValueError, UnicodeDecodeError, RecursionError):
         return []
     data = doc.get("data")
-    return [str(path.parent / data)] if isinstance(data, str) and data.strip() else []
+    return [(str(path.parent / data), f"the samples of {path}")] if isinstance(data, str) and data.strip() else []

@@ -15,8 +15,9 @@ from pathlib import Path
 
 from .errors import OutputError
 
-#: ``(device, inode) -> path as the user named it`` of the running command's inputs (``None``: no command runs).
-_INPUTS: dict[tuple[int, int], str] | None = None
+#: ``(device, inode) -> (path as the user named it, its role or None)`` of the running command's inputs
+#: (``None``: no command runs).
+_INPUTS: dict[tuple[int, int], tuple[str, str | None]] | None = None
 
 
 @contextlib.contextmanager
@@ -26,14 +27,15 @@ def guarded_inputs(paths=()):
     previous, _INPUTS = _INPUTS, {}
     try:
         for path in paths:
-            register_input(path)
+            register_input(*(path if isinstance(path, tuple) else (path,)))
         yield
     finally:
         _INPUTS = previous
 
 
-def register_input(path) -> None:
-    """Remember an existing input file (nothing when no command runs or the file does not exist)."""
+def register_input(path, role: str | None = None) -> None:
+    """Remember an existing input file (nothing when no command runs or the file does not exist);
+    ``role`` names it in messages (``"the samples of unit42.toml"``)."""
     if _INPUTS is None:
         return
     try:
@@ -41,7 +43,7 @@ def register_input(path) -> None:
     except (OSError, ValueError):
         return
     if stat.S_ISREG(info.st_mode):
-        _INPUTS.setdefault((info.st_dev, info.st_ino), str(path))
+        _INPUTS.setdefault((info.st_dev, info.st_ino), (str(path), role))
 
 
 def check_output_target(path) -> None:
@@ -64,8 +66,10 @@ def check_output_target(path) -> None:
     if not stat.S_ISREG(info.st_mode):
         raise OutputError(f"{path}: is not a regular file (a device, FIFO or socket, or a link to one): refusing "
                           "to replace it")
-    source = (_INPUTS or {}).get((info.st_dev, info.st_ino))
-    if source is not None:
-        same = "" if os.path.abspath(source) == os.path.abspath(path) else f" (it is {source})"
-        raise OutputError(f"{path}: is an input of this command{same}: refusing to write over it; choose "
+    found = (_INPUTS or {}).get((info.st_dev, info.st_ino))
+    if found is not None:
+        source, role = found
+        same = [] if os.path.abspath(source) == os.path.abspath(path) else [f"it is {source}"]
+        what = f" ({', '.join(same + ([role] if role else []))})" if same or role else ""
+        raise OutputError(f"{path}: is an input of this command{what}: refusing to write over it; choose "
                           "another output name")

@@ -273,3 +273,18 @@ def test_small_hand_cases_are_one_line_exit_2(recording, table, tmp_path, capsys
                  "--out", str(tmp_path / "s.toml")]) == 2
     refused(capsys, "--name")
     assert not (tmp_path / "s.toml").exists()
+
+
+def test_two_writers_making_the_same_folders_both_succeed(tmp_path, monkeypatch):
+    """The folder made by another process between our look and our mkdir is no failure."""
+    import pathlib
+
+    real_mkdir = pathlib.Path.mkdir
+
+    def racing_mkdir(self, *args, **kwargs):
+        real_mkdir(self, *args, **kwargs)  # the other process wins the race ...
+        raise FileExistsError(17, "File exists", str(self))  # ... and ours finds it made
+
+    monkeypatch.setattr(pathlib.Path, "mkdir", racing_mkdir)
+    write_files({tmp_path / "a" / "b" / "x.csv": b"1"})
+    assert (tmp_path / "a" / "b" / "x.csv").read_bytes() == b"1"

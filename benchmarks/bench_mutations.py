@@ -16,6 +16,11 @@ with a 20 s alarm.  Counted:
 * partial output: on every ``--calibrate-every``-th accepted case ``casadi-sins calibrate`` writes a
   table and its report into a fresh folder; afterwards either all of them exist or none.
 
+Issue 24 adds the hostile classes of :mod:`hostile` (beside this file): huge finite columns,
+compression bombs (and one of 1 GB of rows in a child process, its peak memory measured), device and
+link outputs, formula names, outputs onto inputs, degenerate tables; each through the command line,
+refusals expected (one line, exit 2), inputs byte-identical and nothing written.
+
 Writes ``results/mutations.{csv,md}`` (one row per mutation class) and prints the totals.
 """
 
@@ -44,6 +49,9 @@ ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("mutations", ROOT / "tests" / "fuzz" / "mutations.py")
 mutations = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(mutations)
+_spec = importlib.util.spec_from_file_location("hostile", Path(__file__).resolve().parent / "hostile.py")
+hostile = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(hostile)
 
 
 class Hang(Exception):
@@ -100,6 +108,8 @@ def main_benchmark():
     parser.add_argument("--seeds", type=int, default=150, help="seeds per CSV mutation class (default 150)")
     parser.add_argument("--toml-seeds", type=int, default=25, help="seeds per TOML edit (default 25)")
     parser.add_argument("--calibrate-every", type=int, default=25, help="calibrate every n-th accepted case")
+    parser.add_argument("--hostile-seeds", type=int, default=100, help="seeds per hostile class (default 100)")
+    parser.add_argument("--bomb-gb", type=float, default=1.0, help="rows of the big gzip bomb, GB (0: none)")
     parser.add_argument("--out", default=str(ROOT / "results"), help="folder of the results tables")
     args = parser.parse_args()
     problem = load_problem()
@@ -113,9 +123,16 @@ def main_benchmark():
         toml, csv = base.read_text(), base.with_suffix(".csv").read_text()
         cases = [("csv " + kind, seed) for kind in sorted(mutations.CSV_MUTATIONS) for seed in range(args.seeds)]
         cases += [(f"toml edit {i}", seed) for i in range(len(mutations.TOML_EDITS)) for seed in range(args.toml_seeds)]
+        cases += [(kind, seed) for kind in hostile.CLASSES for seed in range(args.hostile_seeds)]
+        if args.bomb_gb > 0:
+            rows.append({"class": f"gzip bomb {args.bomb_gb:g} GB of rows",
+                         **hostile.big_bomb(Path(tmp) / "bomb", toml, csv, args.bomb_gb)})
         for n, (kind, seed) in enumerate(cases):
             folder = Path(tmp) / f"case{n}"
             folder.mkdir()
+            if kind in hostile.CLASSES:
+                rows.append({"class": kind, **hostile.run(kind, folder, toml, csv, seed)})
+                continue
             if kind.startswith("csv "):
                 case_toml, case_csv = toml, mutations.mutate_csv(csv, kind[4:], seed)
             else:
@@ -130,6 +147,8 @@ def main_benchmark():
     table = frame.groupby("class").sum(numeric_only=True).reset_index()
     table.insert(1, "cases", frame.groupby("class").size().to_numpy())
     totals = table.drop(columns="class").sum()
+    if "peak_rss_mb" in table:
+        table["peak_rss_mb"] = frame.groupby("class")["peak_rss_mb"].max().to_numpy()
     print(table.to_string(index=False))
     print(f"{len(frame)} cases in {time.perf_counter() - started:.0f} s: {totals['traceback']} tracebacks, "
           f"{totals['silent_wrong']} silent wrong tables, {totals['partial']} partial outputs, {totals['hang']} hangs; "

@@ -16,15 +16,19 @@ import traceback
 
 from ..calibrate.result import CalibrationError
 from ..core.errors import InputError, OutputError
-from ..core.files import check_writable
+from ..core.files import check_writable, gathered_writes
+from ..core.guard import guarded_inputs
 from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
+from .inputs import command_inputs
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
 FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
                   "modulate-mc", "apply", "history", "batch", "thermal", "design-scheme"}
+#: Commands that write as they go by design (a resumable ledger); every other one writes all at the end.
+INCREMENTAL_OUTPUTS = {"batch"}
 
 __all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
 
@@ -33,17 +37,30 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM or SIGHUP: handled as Ctrl-C is (everything stops, nothing half-written), told apart."""
 
 
+#: The signal received while the current command runs (0: none): whatever a library turns it into (CasADi
+#: reports an interrupted Ipopt as a RuntimeError), the command ends as interrupted or terminated.
+_received = 0
+
+
 @contextlib.contextmanager
 def _termination_handled():
-    """SIGTERM and SIGHUP raise :class:`Terminated` in the main thread while the command runs."""
+    """SIGTERM and SIGHUP raise :class:`Terminated`, SIGINT KeyboardInterrupt, in the main thread while the
+    command runs; each is remembered (:data:`_received`)."""
+    global _received
+    _received = 0
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def handler(signum, frame):
+        global _received
+        _received = _received or signum
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
         raise Terminated(signal.Signals(signum).name)
 
-    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT)
+                if sig != signal.SIGINT or signal.getsignal(sig) is signal.default_int_handler}
     try:
         yield
     finally:
@@ -57,11 +74,22 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     name = f"casadi-sins {args.command}"
     try:
-        with _termination_handled():
+        with _termination_handled(), guarded_inputs(command_inputs(args)):
             if getattr(args, "out", None):
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
-            with single_threaded():
+            with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
+                                     else gathered_writes()):
                 return args.func(args)
+    except BaseException as exc:  # noqa: BLE001 (every outcome is one line and a status)
+        return _outcome(name, exc)
+
+
+def _outcome(name: str, exc: BaseException) -> int:
+    """The exit status of a command that raised ``exc`` (and its one line on standard error)."""
+    if _received and not isinstance(exc, (KeyboardInterrupt, SystemExit)):  # a signal turned into another error
+        exc = Terminated() if _received != signal.SIGINT else KeyboardInterrupt()
+    try:
+        raise exc
     except (InputError, OutputError, CliError, CalibrationError) as exc:
         return _fail(name, one_line(exc, 2000))
     except Terminated:

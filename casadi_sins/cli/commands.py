@@ -18,9 +18,10 @@ from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
 from ..core.text import one_line, plural
 from ..core.version import software_versions
+from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
-from ..data.description import description_toml, read_recording
+from ..data.description import MAX_NAME, description_toml, read_recording
 from ..data.problem import load_problem
 from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
@@ -107,9 +108,12 @@ def cmd_segment(args) -> int:
     data = Path(args.data)
     if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
         raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+    name = args.name or Path(args.out).stem
+    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
+        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
+                       f"{one_line(repr(name), 80)}")
     time_, pulses = read_samples(data, args.rate)
     site = Site(np.radians(args.latitude), args.height, args.gravity)
-    name = args.name or Path(args.out).stem
     try:
         rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
     except ValueError as exc:
@@ -229,6 +233,7 @@ def cmd_analyze(args) -> int:
 
 def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
+    check_scheduler(args.dask)  # before any work or progress bar
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)

@@ -8,6 +8,7 @@ import math
 import time
 from pathlib import Path
 
+from ..studies.parallel import check_scheduler
 from ..core.files import write_files
 from ..core.toml import read_toml
 from ..data.description import read_recording
@@ -75,6 +76,7 @@ def cmd_history(args) -> int:
 
 def cmd_batch(args) -> int:
     """``batch``: every recording calibrated, the fleet table and the spread across units."""
+    check_scheduler(args.dask)  # before any work or progress bar
     if args.tolerance:
         read_acceptance_sheet(args.tolerance)  # a bad sheet stops the batch before any unit
     recordings = batch_recordings(args.recordings)

@@ -2,18 +2,25 @@
 
 Every command writes its outputs through :func:`write_files` (all together or none) or
 :func:`atomic_open` (one file written in pieces), and checks the place with
-:func:`check_writable` before it computes anything.
+:func:`check_writable` before it computes anything.  Within :func:`gathered_writes` (how the command line
+runs a command) every write is only staged and all are written together when the command succeeds; every
+target is checked by :func:`~casadi_sins.core.guard.check_output_target` (never an input, never a device).
 """
 
 from __future__ import annotations
 
 import contextlib
 import hashlib
+import io
 import os
 import tempfile
 from pathlib import Path
 
 from .errors import OutputError
+from .guard import check_output_target
+
+#: The writes staged by :func:`gathered_writes` (``None``: written at once).
+_PENDING: dict | None = None
 
 
 def _umask() -> int:
@@ -23,9 +30,30 @@ def _umask() -> int:
 
 
 def safe_stem(name: str) -> str:
-    """A name usable as a file name inside an output folder (``../x`` or ``/x`` cannot leave it)."""
-    cleaned = "".join(c if c.isalnum() or c in "-_." else "-" for c in str(name).replace("\\", "/").split("/")[-1])
-    return cleaned.strip(".")[:120] or "recording"
+    """A name usable as a file name inside an output folder (``../x`` or ``/x`` cannot leave it): the
+    last path component, only ASCII letters, digits and ``-_.``, no leading dot, at most 120 characters.
+    The one function by which any name (a recording's, a unit's, a label) becomes a path."""
+    last = str(name).replace("\\", "/").split("/")[-1]
+    cleaned = "".join(c if (c.isascii() and c.isalnum()) or c in "-_." else "-" for c in last)
+    return cleaned.strip(".")[:120].strip(".") or "recording"
+
+
+@contextlib.contextmanager
+def gathered_writes():
+    """Stage every write of the block and write them all together (:func:`write_files`) when it ends
+    without an error; nothing is written when it does not (an error, Ctrl-C, SIGTERM)."""
+    global _PENDING
+    if _PENDING is not None:  # already gathering
+        yield
+        return
+    _PENDING = {}
+    try:
+        yield
+        pending = _PENDING
+    finally:
+        _PENDING = None
+    if pending:
+        write_files(pending)
 
 
 @contextlib.contextmanager
@@ -39,6 +67,13 @@ def atomic_open(path: str | Path, mode: str = "wb", **options):
         Naming ``path`` when the file system refuses it.
     """
     path = Path(path)
+    check_output_target(path)
+    if _PENDING is not None:
+        buffer = io.BytesIO() if "b" in mode else io.StringIO(newline="")
+        yield buffer
+        data = buffer.getvalue()
+        _PENDING[path] = data if isinstance(data, bytes) else data.encode(options.get("encoding") or "utf-8")
+        return
     made: list[Path] = []
     tmp = None
     try:
@@ -87,8 +122,7 @@ def check_writable(path: str | Path, directory: bool = False) -> Path:
             raise OutputError(f"{path}: exists and is not a folder")
         folder = path
     else:
-        if path.is_dir():
-            raise OutputError(f"{path}: is a folder, not a file to write")
+        check_output_target(path)
         folder = path.parent
     probe = folder
     while not probe.exists():  # the first existing ancestor must let us create the rest
@@ -114,7 +148,12 @@ def _make_folders(folder: Path, made: list[Path]) -> None:
         missing.append(probe)
         probe = probe.parent
     for item in reversed(missing):
-        item.mkdir()
+        try:
+            item.mkdir()
+        except FileExistsError:  # another process made it meanwhile: fine if it is a folder
+            if not item.is_dir():
+                raise
+            continue
         made.append(item)
 
 
@@ -141,6 +180,11 @@ def write_files(files: dict) -> list[Path]:
     OutputError
         Naming the file that could not be written.
     """
+    for path in files:
+        check_output_target(path)
+    if _PENDING is not None:
+        _PENDING.update({Path(path): data for path, data in files.items()})
+        return [Path(path) for path in files]
     staged: list[tuple[str, Path]] = []
     made: list[Path] = []
     current = None

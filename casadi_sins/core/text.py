@@ -22,12 +22,41 @@ def markdown_text(text, limit: int = 2000) -> str:
     """``text`` as inline Markdown that cannot break a table or start a block: one line, ``|``, ``<`` and
     backticks escaped."""
     return (one_line(text, limit).replace("\\", "\\\\").replace("|", "\\|").replace("`", "\\`")
-            .replace("<", "&lt;").replace(">", "&gt;"))
+            .replace("[", "\\[").replace("]", "\\]").replace("<", "&lt;").replace(">", "&gt;"))
 
 
 def code_comment(text, limit: int = 200) -> str:
     """``text`` for a one-line comment of MATLAB, C or TOML: one line, no comment terminators."""
-    return one_line(text, limit).replace("*/", "* /").replace("%{", "% {").replace("%}", "% }")
+    return (one_line(text, limit).replace("*/", "* /").replace("/*", "/ *").replace("%{", "% {")
+            .replace("%}", "% }"))
+
+
+#: Spreadsheets run a cell that starts with one of these as a formula.
+FORMULA_PREFIXES = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_cell(text) -> str:
+    """A name for a CSV cell that no spreadsheet runs as a formula (OWASP: a leading apostrophe)."""
+    text = str(text)
+    return "'" + text if text.startswith(FORMULA_PREFIXES) else text
+
+
+#: An ASCII decimal number: no digit groups (``1_000``), no other scripts' digits (``١٢٣``, ``１２３``).
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+def decimal_number(text) -> float:
+    """The value of a numeric field: only ASCII decimal numbers (surrounding blanks allowed).
+
+    Raises
+    ------
+    ValueError
+        For anything else (``1_000``, ``١٢٣``, ``１２３``, ``0x10``, ``inf``, ``nan``, empty).
+    """
+    field = str(text).strip(" \t")
+    if not _DECIMAL.fullmatch(field):
+        raise ValueError(f"not an ASCII decimal number: {field!r}")
+    return float(field)
 
 
 def plural(count: int, word: str) -> str:

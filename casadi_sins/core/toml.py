@@ -59,7 +59,25 @@ def read_toml_text(path: str | Path, what: str) -> tuple[dict, str]:
         raise InputError(path, f"nested too deeply for a {what}") from None
     if _depth(doc) > MAX_DEPTH:
         raise InputError(path, f"nested more than {MAX_DEPTH} levels deep: not a {what}")
+    _check_plain_numbers(path, text)
     return doc, text
+
+
+_STRINGS = re.compile(r'"(?:[^"\\]|\\.)*"|\'[^\']*\'')
+#: A TOML number that is not plain decimal: digit groups (1_000) or hexadecimal, octal, binary.
+_NOT_DECIMAL = re.compile(r"(?<![\w.+-])[+-]?(?:[0-9]+(?:_[0-9]+)+|0[xob][0-9A-Fa-f_]+)(?![\w])")
+
+
+def _check_plain_numbers(path: Path, text: str) -> None:
+    """Only ASCII decimal numbers in values (TOML also reads ``1_000`` and ``0x10``; no other format does)."""
+    for number, line in enumerate(text.splitlines(), start=1):
+        value = _STRINGS.sub('""', line).split("#", 1)[0]
+        if "=" in value and not value.lstrip().startswith("["):
+            value = value.split("=", 1)[1]
+        found = _NOT_DECIMAL.search(value)
+        if found:
+            raise InputError(path, f"{found.group(0)!r} is not a plain decimal number (write it without '_' "
+                             "or a base prefix)", line=number)
 
 
 def _depth(value, level: int = 0) -> int:

@@ -156,8 +156,8 @@ def check_physical_range(rec: Recording, data_path) -> None:
             ("gyro", rec.gyro, PULSE_COLUMNS[:3], EARTH_RATE, MAX_RATE, "deg/s"),
             ("accel", rec.accel, PULSE_COLUMNS[3:], rec.site.g, MAX_SPECIFIC_FORCE, "g")):
         medians = np.array([np.median(pulses[sl], axis=0) for sl in statics])
-        design = medians**2
-        if not np.all(np.any(design > 0, axis=0)):
+        design = medians**2  # finite: the reader refuses pulses beyond 2**53 (no solve sees inf, none hangs)
+        if not np.all(np.isfinite(design)) or not np.all(np.any(design > 0, axis=0)):
             continue
         u = np.linalg.lstsq(design, np.full(len(statics), (magnitude * rec.dt) ** 2), rcond=None)[0]
         if np.any(u <= 0):

@@ -1,7 +1,5 @@
 """The CSV of raw pulse increments: ``time, gyro_x..z, accel_x..z`` (extra columns are ignored).
 
-An optional ``temperature`` column (degC per sample) is read when asked for.
-
 ``time`` is the end of each sample interval, strictly increasing at the uniform rate ``rate_hz``;
 pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files are read as such.
 """
@@ -9,9 +7,8 @@ pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files
 from __future__ import annotations
 
 import csv
-import io
 import math
-import re
+import io
 import warnings
 from pathlib import Path
 
@@ -19,16 +16,24 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import InputError, shown
-from ..core.inputs import check_input_file, check_memory_for, decompression_errors, first_line, open_binary
+from ..core.inputs import (check_input_file, check_memory_for, decompression_errors, first_line, memory_available,
+                           open_binary)
+from ..core.text import decimal_number
 from .recording import COLUMNS, PULSE_COLUMNS, TIME_TOLERANCE
 
 #: The optional column of the unit's temperature, degC.
 TEMPERATURE_COLUMN = "temperature"
 
-
 #: More columns than this is not a CSV of samples (the format has 7; extra columns are allowed).
 MAX_COLUMNS = 1000
-_FIELDS = re.compile(r"Expected (\d+) fields in line (\d+), saw (\d+)")
+
+
+#: Bytes of text parsed at a time: memory is the final arrays plus about this much.
+BLOCK_BYTES = 8 << 20
+#: No row of samples is longer (1000 columns of long numbers fit); a longer one is not a CSV of samples.
+MAX_LINE_BYTES = 1 << 20
+#: No pulse count or increment is larger: beyond 2**53 a float cannot even count pulses exactly.
+MAX_PULSE = 2.0**53
 
 
 def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False) -> tuple:
@@ -36,10 +41,12 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
 
     With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one.
 
-    Every row must have exactly the header's number of fields (a comma inside a number would shift the
-    columns); the columns are found by name, extra ones are ignored.  Floats are parsed directly (8 bytes
-    a value: 14 million rows in about 1 GB); only when that fails is the file read again row by row, to
-    name the line and column at fault.
+    The file is read block by block (:data:`BLOCK_BYTES`) and every block is checked before the next is
+    read: exactly the header's number of fields in each row (a comma inside a number would shift the
+    columns), ASCII decimal numbers, finite, no pulse beyond :data:`MAX_PULSE`, time strictly increasing
+    at the uniform rate.  Reading stops at the first bad line; the memory held is the arrays read so far
+    (checked against the memory available as they grow) plus one block, so a compressed file that
+    expands without bound (a bomb) is refused as it is read.
 
     Raises
     ------
@@ -51,19 +58,19 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     try:
         columns = _header(data_path)
         wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
-        values = _parse(data_path, columns, wanted)
+        values = _stream(data_path, columns, 1.0 / rate_hz, wanted)
     except InputError:
         raise
     except MemoryError:
         raise InputError(data_path, "not enough memory to read it") from None
     except UnicodeDecodeError:
         _raise_encoding_error(data_path)
-    except pd.errors.EmptyDataError:
-        raise InputError(data_path, "fewer than two samples") from None
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
-    time, pulses = check_time(data_path, values[:, :len(COLUMNS)], rate_hz)
+    if len(values) < 2:
+        raise InputError(data_path, "fewer than two samples")
+    time, pulses = values[:, 0], values[:, 1:len(COLUMNS)]
     if not with_temperature:
         return time, pulses
     return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
@@ -86,42 +93,74 @@ def _header(data_path: Path) -> list[str]:
     return columns
 
 
-def _parse(data_path: Path, columns: list[str], wanted=COLUMNS) -> np.ndarray:
-    """All rows as floats, the ``wanted`` columns in order; every row with exactly the header's fields."""
-    width = len(columns)
+def _blocks(data_path: Path):
+    """``(first line number, bytes of whole lines)`` after the header, :data:`BLOCK_BYTES` at a time."""
+    with open_binary(data_path) as handle:
+        handle.readline(MAX_LINE_BYTES)
+        line, carry = 2, b""
+        while True:
+            chunk = handle.read(BLOCK_BYTES)
+            text = carry + chunk
+            cut = text.rfind(b"\n") + 1 if chunk else len(text)
+            whole, carry = text[:cut], text[cut:]
+            if len(carry) > MAX_LINE_BYTES:
+                raise InputError(data_path, f"a line longer than {MAX_LINE_BYTES} bytes: not a CSV of samples",
+                                 line=line + whole.count(b"\n"))
+            if whole:
+                yield line, whole
+                line += whole.count(b"\n")
+            if not chunk:
+                return
+
+
+def _stream(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS) -> np.ndarray:
+    """Every row's ``wanted`` columns, block by block, each block checked before the next is read."""
+    parts: list[np.ndarray] = []
+    held, budget, last = 0, memory_available(), None
+    for line, block in _blocks(data_path):
+        values = _block_values(data_path, columns, line, block, wanted)
+        last = _check_block(data_path, values, line, block, dt, last)
+        parts.append(values)
+        held += values.nbytes
+        if 2 * held + BLOCK_BYTES > budget:
+            raise InputError(data_path, f"more rows than fit in memory ({held / 1e9:.3g} GB read before line "
+                             f"{line}, {budget / 1e9:.3g} GB available; a compression bomb?)")
+    return np.concatenate(parts) if parts else np.zeros((0, len(wanted)))
+
+
+def _block_values(data_path: Path, columns: list[str], line: int, block: bytes, wanted=COLUMNS) -> np.ndarray:
+    """The ``wanted`` columns of one block of whole lines; a problem names its line and column."""
     take = [columns.index(c) for c in wanted]
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)  # never drop fields silently
-            frame = pd.read_csv(data_path, header=None, skiprows=1, names=list(range(width)), index_col=False,
+            frame = pd.read_csv(io.BytesIO(block), header=None, names=list(range(len(columns))), index_col=False,
                                 dtype=np.float64, skipinitialspace=True, engine="c")
-    except pd.errors.ParserError as exc:
-        found = _FIELDS.search(str(exc))
-        if found:
-            raise InputError(data_path, f"{found.group(3)} fields, the header has {found.group(1)}",
-                             line=int(found.group(2))) from None
-        return _read_rows(data_path, columns, wanted)
-    except (ValueError, TypeError, pd.errors.ParserWarning):
-        return _read_rows(data_path, columns, wanted)  # names the text at fault
+    except (ValueError, TypeError, pd.errors.ParserError, pd.errors.ParserWarning, pd.errors.EmptyDataError):
+        return _block_rows(data_path, columns, take, line, block)
     values = frame.to_numpy(dtype=float)[:, take]
-    if len(frame) and (not np.all(np.isfinite(values)) or frame.isna().to_numpy().any()):
-        return _read_rows(data_path, columns, wanted)
+    if not np.all(np.isfinite(values)):
+        return _block_rows(data_path, columns, take, line, block)  # names the text at fault
     return values
 
 
-def _read_rows(data_path: Path, columns: list[str], wanted=COLUMNS) -> np.ndarray:
-    """Read row by row (only after the fast parse failed) to name the first line at fault."""
-    take = [columns.index(c) for c in wanted]
+def _block_rows(data_path: Path, columns: list[str], take: list[int], line: int, block: bytes) -> np.ndarray:
+    """One block read row by row (only after the fast parse failed) to name the first line at fault."""
     rows = []
-    with io.TextIOWrapper(open_binary(data_path), encoding="utf-8", newline="") as handle:
-        reader = csv.reader(handle, skipinitialspace=True)
+    lines = block.split(b"\n")
+    for k, raw in enumerate(lines[:-1] if lines[-1] == b"" else lines):
         try:
-            next(reader, None)
-            for row in reader:
-                rows.append(_row_values(data_path, columns, take, row, reader.line_num))
-        except csv.Error as exc:  # an unmatched quote runs a field over many lines
-            raise InputError(data_path, f"not a CSV row ({exc})", line=reader.line_num) from None
-    return np.array([r for r in rows if r is not None], dtype=float).reshape(-1, len(wanted))
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(data_path, f"not UTF-8 text (byte {raw[exc.start]:#04x})", line=line + k) from None
+        try:
+            row = next(csv.reader([text.rstrip("\r")], skipinitialspace=True), [])
+        except csv.Error as exc:
+            raise InputError(data_path, f"not a CSV row ({exc})", line=line + k) from None
+        values = _row_values(data_path, columns, take, row, line + k)
+        if values is not None:
+            rows.append(values)
+    return np.array(rows, dtype=float).reshape(-1, len(take))
 
 
 def _row_values(data_path: Path, columns: list[str], take: list[int], row: list[str], line: int):
@@ -131,34 +170,77 @@ def _row_values(data_path: Path, columns: list[str], take: list[int], row: list[
     if len(row) != len(columns):
         raise InputError(data_path, f"{len(row)} fields, the header has {len(columns)}", line=line)
     values = []
-    for j in take:
+    for j in take:  # extra columns are ignored
         try:
-            value = float(row[j])
+            values.append(decimal_number(row[j]))
         except ValueError:
-            value = float("nan")
-        if not math.isfinite(value):
-            raise InputError(data_path, f"{shown(row[j])} is not a finite number", line=line, column=columns[j])
-        values.append(value)
+            raise InputError(data_path, f"{shown(row[j])} is not a finite number{_plain_only(row[j])}", line=line,
+                             column=columns[j]) from None
     return values
 
 
-def check_time(data_path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """Time strictly increasing at the uniform rate; returns ``(time, pulses)``."""
-    if len(values) < 2:
-        raise InputError(data_path, "fewer than two samples")
-    time = values[:, 0]
+def _plain_only(field: str) -> str:
+    """A hint when Python would read ``field`` as a number (``1_000``, other scripts' digits) but we do not."""
+    try:
+        return " (only plain ASCII decimal numbers are read)" if math.isfinite(float(field)) else ""
+    except ValueError:
+        return ""
+
+
+def _check_block(data_path: Path, values: np.ndarray, line: int, block: bytes, dt: float, last):
+    """Pulses within :data:`MAX_PULSE`, time strictly increasing at the uniform rate (from the previous
+    block's last time ``last``); returns this block's last time."""
+    if not len(values):
+        return last
+    big = np.abs(values[:, 1:len(COLUMNS)]) > MAX_PULSE
+    if big.any():
+        row, col = np.argwhere(big)[0]
+        raise InputError(data_path, f"{values[row, 1 + col]:.6g} is not a pulse count or increment (beyond "
+                         f"{MAX_PULSE:.3g}): not a physical measurement", line=_line_of(block, line, row), column=PULSE_COLUMNS[col])
+    time = values[:, 0] if last is None else np.concatenate([[last], values[:, 0]])
+    fault = _time_fault(time, dt)
+    if fault:
+        k, message = fault
+        raise InputError(data_path, message, line=_line_of(block, line, k - (0 if last is None else 1)))
+    return float(values[-1, 0])
+
+
+def _time_fault(time: np.ndarray, dt: float) -> tuple[int, str] | None:
+    """The first sample ``k`` whose time does not increase, or not by ``dt``, and what is wrong; else None."""
     step = np.diff(time)
-    dt = 1.0 / rate_hz
-    if (step <= 0).any():
-        row = int(np.argmax(step <= 0)) + 1
-        raise InputError(data_path, f"time {time[row]:.10g} does not increase (previous {time[row - 1]:.10g})",
-                         line=row + 2)
+    bad = step <= 0
+    if bad.any():
+        k = int(np.argmax(bad)) + 1
+        return k, f"time {time[k]:.10g} does not increase (previous {time[k - 1]:.10g})"
     off = np.abs(step - dt) > TIME_TOLERANCE * dt
     if off.any():
-        row = int(np.argmax(off)) + 1
-        raise InputError(data_path, f"time step {step[row - 1]:.6g} s differs from 1/rate_hz = {dt:.6g} s (time "
-                         "must be uniform)", line=row + 2)
-    return time, values[:, 1:]
+        k = int(np.argmax(off)) + 1
+        return k, f"time step {step[k - 1]:.6g} s differs from 1/rate_hz = {dt:.6g} s (time must be uniform)"
+    return None
+
+
+def check_time(data_path, values: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Time (the first column of ``values``) strictly increasing at the uniform rate, for samples that come
+    as arrays (importers); returns ``(time, pulses)``."""
+    if len(values) < 2:
+        raise InputError(data_path, "fewer than two samples")
+    fault = _time_fault(values[:, 0], 1.0 / rate_hz)
+    if fault:
+        raise InputError(data_path, fault[1], line=fault[0] + 2)
+    return values[:, 0], values[:, 1:]
+
+
+def _line_of(block: bytes, line: int, row: int) -> int:
+    """The file's line number of the block's ``row``-th row of values (blank lines skipped)."""
+    if block.count(b"\n\n") == 0 and b"\n\r\n" not in block and not block.startswith((b"\n", b"\r\n")):
+        return line + row
+    seen = -1
+    for k, raw in enumerate(block.split(b"\n")):
+        if raw.strip():
+            seen += 1
+            if seen == row:
+                return line + k
+    return line + row
 
 
 def _raise_encoding_error(data_path: Path):

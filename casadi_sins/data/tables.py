@@ -19,8 +19,11 @@ from ..core.inputs import check_input_file
 from ..core.units import TO_SI, dimension_of
 from ..model.output import compensate_table, compensation_matrices
 from ..model.parameters import ParameterSet
-from ..model.registry import groups_in, is_known, model_names, unit_of
-from .recording import PULSE_COLUMNS
+from ..core.text import decimal_number
+from ..model.output import sensor_matrices
+from ..model.registry import (ACCEL_BIAS, ACCEL_SCALE, GYRO_BIAS, GYRO_SCALE, NAMES, groups_in, is_known, model_names,
+                              unit_of)
+from .recording import MAX_RATE, MAX_SPECIFIC_FORCE, PULSE_COLUMNS
 
 
 @dataclasses.dataclass
@@ -130,7 +133,45 @@ def read_table(path: str | Path) -> Table:
     if missing:
         raise InputError(path, f"missing parameters {', '.join(missing)}")
     sig = np.array([sigmas[n] for n in names])
-    return Table(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig, names=names)
+    params = Table(np.array([values[n] for n in names]), sigma=None if np.all(np.isnan(sig)) else sig, names=names)
+    check_table(path, params)
+    return params
+
+
+#: The largest condition number of a misalignment matrix K (unit diagonal; a real unit's is within 1.01).
+MAX_CONDITION = 100.0
+#: Pulse weights (SI per pulse) outside this range are no sensor's (1 is a compensated recording's).
+SCALE_RANGE = (1e-15, 1e3)
+
+
+def check_table(path, params: ParameterSet) -> None:
+    """A table that compensation can use: pulse weights within :data:`SCALE_RANGE` in size, biases within
+    what any unit measures, misalignment matrices invertible with a condition number within
+    :data:`MAX_CONDITION` (eq. 1 is inverted with ``K^-1``).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the parameter (or matrix) at fault.
+    """
+    p = np.asarray(params.core, dtype=float)
+    for span, sensor in ((ACCEL_SCALE, "accelerometer"), (GYRO_SCALE, "gyro")):
+        for name, value in zip(NAMES[span], p[span]):
+            if not SCALE_RANGE[0] <= abs(value) <= SCALE_RANGE[1]:
+                raise InputError(path, f"{name} = {value:.6g} {unit_of(name)}: no {sensor} has this pulse weight "
+                                 f"(its size must be within {SCALE_RANGE[0]:g}..{SCALE_RANGE[1]:g})")
+    for span, limit, unit in ((ACCEL_BIAS, MAX_SPECIFIC_FORCE, "m/s^2"), (GYRO_BIAS, MAX_RATE, "rad/s")):
+        for name, value in zip(NAMES[span], p[span]):
+            if abs(value) > limit:
+                raise InputError(path, f"{name} = {value:.6g} {unit}: beyond anything a unit measures "
+                                 f"({limit:.3g} {unit})")
+    k_a, _, _, k_g, _, _ = (np.asarray(m, dtype=float) for m in sensor_matrices(p))
+    for k, sensor in ((k_a, "accelerometer"), (k_g, "gyro")):
+        condition = np.linalg.cond(k) if np.all(np.abs(k) < 1e3) else np.inf
+        if not condition <= MAX_CONDITION:
+            what = "singular" if not condition < 1e12 else "ill-conditioned"
+            raise InputError(path, f"the {sensor} misalignments make K {what} (condition number {condition:.3g}, "
+                             f"at most {MAX_CONDITION:g}): the table cannot compensate (eq. 1 inverted)")
 
 
 def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
@@ -166,14 +207,16 @@ def _entry(path: Path, line: int, row: dict, seen: dict) -> tuple[str, float, fl
     if dimension_of(unit) != dimension_of(unit_of(name)):
         raise InputError(path, f"unit {unit!r} does not fit {name} (expected {unit_of(name)})", line=line)
     try:
-        value = float(row["value"])
+        value = decimal_number(row["value"])
     except ValueError:
+        if row["value"].strip().lower().lstrip("+-") in ("inf", "infinity", "nan"):
+            raise InputError(path, f"value of {name} is not finite", line=line) from None
         raise InputError(path, f"value {shown(row['value'])} of {name} is not a number", line=line) from None
     if not np.isfinite(value):
         raise InputError(path, f"value of {name} is not finite", line=line)
     text = row.get("sigma", "").strip()
     try:
-        sigma = float(text) * TO_SI[unit] if text else np.nan
+        sigma = decimal_number(text) * TO_SI[unit] if text else np.nan
     except ValueError:
         raise InputError(path, f"sigma {shown(text)} of {name} is not a number", line=line) from None
     if not (np.isnan(sigma) or (np.isfinite(sigma) and sigma >= 0)):

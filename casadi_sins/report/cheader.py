@@ -21,6 +21,7 @@ form: when a table has them, the header says so and defines ``CASADI_SINS_EXTRAS
 
 from __future__ import annotations
 
+import hashlib
 import re
 
 import numpy as np
@@ -63,7 +64,9 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
     metadata = {k: v for k, v in (metadata or {}).items() if v is not None}
     mats = compensation_matrices(params.core)
     (m_g, c_g), (m_a, c_a) = mats["gyro"], mats["accel"]
-    guard = "CASADI_SINS_COMPENSATION_" + re.sub(r"[^A-Z0-9]", "_", str(metadata.get("unit_id", "")).upper()) + "_H"
+    unit = str(metadata.get("unit_id", ""))
+    tag = hashlib.sha256(unit.encode("utf-8", "surrogatepass")).hexdigest()[:8].upper()  # SN-1 and SN_1 differ
+    guard = f"CASADI_SINS_COMPENSATION_{re.sub(r'[^A-Z0-9]', '_', unit.upper())[:60]}_{tag}_H"
     lines = ["/* Sensor compensation of a strapdown IMU, written by casadi-sins " + __version__ + ".",
              " *",
              " * Per sample interval of length dt (s), from the raw pulses dN_g, dN_a of the three gyros and",

@@ -126,6 +126,9 @@ def read_provenance(table_path: str | Path) -> Provenance:
         raise InputError(report, f"'created' {one_line(repr(data.get('created')), 60)} is not an ISO date") from None
     if date.tzinfo is None:
         date = date.replace(tzinfo=datetime.timezone.utc)
+    if not EARLIEST_YEAR <= date.year < LATEST_YEAR:
+        raise InputError(report, f"'created' {one_line(repr(data.get('created')), 60)} is not a date of a "
+                         f"calibration (years {EARLIEST_YEAR} to {LATEST_YEAR - 1})")
     rec = data.get("recording") if isinstance(data.get("recording"), dict) else {}
     versions = data.get("versions") if isinstance(data.get("versions"), dict) else {}
     return Provenance(table, table_hash, date, _text(data.get("unit_id")) or _text(_conditions(data).get("unit_id")),
@@ -139,6 +142,10 @@ def _conditions(data: dict) -> dict:
     raw = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
     return {str(k): (v if isinstance(v, (int, float)) and not isinstance(v, bool) else one_line(v))
             for k, v in raw.items() if v is not None}
+
+
+#: Calibration dates outside these years are no calibration's (and 9999-12-31 overflows date arithmetic).
+EARLIEST_YEAR, LATEST_YEAR = 1970, 2200
 
 
 def _text(value) -> str | None:

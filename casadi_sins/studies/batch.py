@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
 import json
 import math
 import os
+import shlex
 import types
 from pathlib import Path
 from typing import Callable, Sequence
@@ -32,8 +34,9 @@ import pandas as pd
 
 from ..calibrate import calibrate
 from ..core.errors import InputError
-from ..core.files import safe_stem, write_files
-from ..core.text import one_line, plural
+from ..core.files import file_sha256, safe_stem, write_files
+from ..core.text import one_line, plural, spreadsheet_cell
+from ..core.toml import read_toml
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
@@ -50,6 +53,10 @@ OUTLIER_THRESHOLD = 5.0
 #: The columns of the spread table.
 SPREAD_COLUMNS = ("parameter", "unit", "units", "median (SI)", "robust spread", "std", "min", "max",
                   "median unit sigma", "outliers")
+#: The key of the unit report (the batch's ledger) holding the SHA-256 of the unit's table as written.
+LEDGER_TABLE_KEY = "table_sha256"
+#: The columns of the fleet tables that carry names (unit ids, paths, messages): no formula in a spreadsheet.
+NAME_COLUMNS = ("unit_id", "recording", "message", "outliers")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,17 +81,23 @@ def file_hash(rec_path) -> str | None:
 
 
 def finished(rec_path, out_dir) -> dict | None:
-    """The report of a unit already calibrated from this very recording, or None."""
+    """The report of a unit already calibrated from this very recording, or None: the report (the ledger)
+    names the recording's SHA-256 as it is now and the SHA-256 of the stored table as it is now (a table
+    changed, truncated or replaced since is calibrated again)."""
     table = unit_table_path(out_dir, rec_path)
     report = companion_paths(table)[0]
-    if not (table.exists() and report.exists()):
+    if not (table.is_file() and report.is_file()):
         return None
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
+        stored = file_sha256(table)
     except (OSError, ValueError, RecursionError):
         return None
-    digest = (data.get("recording") or {}).get("sha256") if isinstance(data, dict) else None
-    return data if digest and digest == file_hash(rec_path) else None
+    if not isinstance(data, dict):
+        return None
+    digest = (data.get("recording") or {}).get("sha256")
+    same_table = data.get(LEDGER_TABLE_KEY) == stored
+    return data if digest and digest == file_hash(rec_path) and same_table else None
 
 
 def row_from_report(data: dict, rec_path, status: str) -> dict:
@@ -115,9 +128,11 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         verdict = judge(result.parameters, sheet) if sheet else None
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}
-        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name, verdict=verdict,
-                                  certificate=options.certificate))
-        data = json.loads(files[companion_paths(table)[0]])
+        files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name,
+                                  verdict=verdict, certificate=options.certificate))
+        report = companion_paths(table)[0]
+        data = {**json.loads(files[report]), LEDGER_TABLE_KEY: hashlib.sha256(files[table]).hexdigest()}
+        files[report] = (json.dumps(data, indent=2, default=str) + "\n").encode()
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
         message = one_line(exc, 500) or type(exc).__name__
@@ -145,6 +160,28 @@ def same_sheet(data: dict, options: BatchOptions) -> bool:
     return judged == (sheet_sha256(options.tolerance) if options.tolerance else None)
 
 
+def check_unit_ids(recordings: Sequence) -> None:
+    """Refuse two recordings of one unit id (a recording's ``name``), naming both; a recording whose name
+    cannot be read is judged later, as that unit's failure.
+
+    Raises
+    ------
+    InputError
+        Naming both recordings and the id.
+    """
+    seen: dict[str, str] = {}
+    for path in recordings:
+        try:
+            name = read_toml(path, "recording description").get("name")
+        except InputError:
+            continue
+        if isinstance(name, str) and name in seen:
+            raise InputError(path, f"unit id {one_line(repr(name), 80)} is also that of {seen[name]}: a batch "
+                             "calibrates each unit once (give each recording its unit's own name)")
+        if isinstance(name, str):
+            seen[name] = str(path)
+
+
 def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOptions(), workers: int | None = None,
               scheduler: str | None = None, progress: Callable[[int, int], None] | None = None,
               resume: bool = True) -> pd.DataFrame:
@@ -164,6 +201,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
             raise InputError(path, f"its unit's table would be {table.name}, as that of {stems[table]}: give the "
                              "recordings of a batch different file names")
         stems[table] = path
+    check_unit_ids(recordings)
     rows: dict[str, dict] = {}
     pending = []
     for path in paths:
@@ -215,7 +253,7 @@ def spread_frame(fleet: pd.DataFrame, threshold: float = OUTLIER_THRESHOLD) -> p
                      "median (SI)": median, "robust spread": robust, "std": float(np.std(natural, ddof=1))
                      if len(values) > 1 else math.nan, "min": float(natural.min()) if len(values) else math.nan,
                      "max": float(natural.max()) if len(values) else math.nan, "median unit sigma": unit_sigma,
-                     "outliers": " ".join(map(str, outliers))})
+                     "outliers": shlex.join(map(str, outliers))})
     return pd.DataFrame(rows, columns=SPREAD_COLUMNS)  # the columns even when no unit calibrated
 
 
@@ -223,10 +261,10 @@ def with_outliers(fleet: pd.DataFrame, spread: pd.DataFrame) -> pd.DataFrame:
     """The fleet table with an ``outliers`` column: each unit's parameters flagged in the spread."""
     flagged: dict[str, list[str]] = {}
     for name, units in zip(spread["parameter"], spread["outliers"]):
-        for unit in str(units).split():
+        for unit in shlex.split(str(units)):
             flagged.setdefault(unit, []).append(name)
     out = fleet.copy()
-    out.insert(4, "outliers", [" ".join(flagged.get(str(u), [])) for u in out["unit_id"]])
+    out.insert(4, "outliers", [" ".join(flagged.get(str(u), [])) for u in out["unit_id"]])  # parameter names
     return out
 
 
@@ -248,6 +286,7 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
     """``fleet.csv`` (every value and sigma, full precision), ``fleet.md`` (status per unit) and
     ``fleet-spread.csv/.md``."""
     out = Path(out_dir)
+    fleet, spread = _named_cells(fleet), _named_cells(spread)
     failed = int((fleet["status"] == "failed").sum())
     rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
     counts = (f"{plural(len(fleet), 'unit')}, {failed} failed"
@@ -262,3 +301,12 @@ def batch_files(fleet: pd.DataFrame, spread: pd.DataFrame, out_dir) -> dict[Path
                              f"units; scale factors ppm about the median); outliers beyond {OUTLIER_THRESHOLD:g} x "
                              "max(robust spread, median unit sigma)", display=spread_display(spread)))
     return files
+
+
+def _named_cells(frame: pd.DataFrame) -> pd.DataFrame:
+    """The frame with every name cell (:data:`NAME_COLUMNS`) safe in a spreadsheet (no formula)."""
+    out = frame.copy()
+    for column in NAME_COLUMNS:
+        if column in out:
+            out[column] = [x if not isinstance(x, str) else spreadsheet_cell(x) for x in out[column]]
+    return out

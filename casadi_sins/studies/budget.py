@@ -36,6 +36,7 @@ from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
+from ..core.files import safe_stem
 from ..report.tables import write_frame
 
 # error state: phi (3), dv_E, dv_N, dL, dlon, then the parameter errors (the 21, then any extra groups)
@@ -240,10 +241,11 @@ def plot_budget(budget: Budget, path: str | Path, title: str) -> Path:
 def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame:
     """The budget's table at 1 h and 24 h (CSV, Markdown) and its plot; returns the table."""
     table = budget.table([3600.0, 86400.0])
-    write_frame(table, Path(out_dir) / f"{name}-budget",
+    stem = safe_stem(name)
+    write_frame(table, Path(out_dir) / f"{stem}-budget",
                 f"{name}: static navigation error by source after calibration (1 sigma, m)",
                 display=display(table, sigmas=float_columns(table)))
-    plot_budget(budget, Path(out_dir) / f"{name}-budget.png", f"{name}: error budget of static navigation")
+    plot_budget(budget, Path(out_dir) / f"{stem}-budget.png", f"{name}: error budget of static navigation")
     return table
 
 

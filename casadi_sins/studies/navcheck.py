@@ -19,6 +19,7 @@ from ..data.problem import GroupPlan, Problem, Timing
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
+from ..core.files import safe_stem
 from ..report.tables import write_frame
 from ..sim import simulate
 
@@ -65,7 +66,8 @@ def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: st
 def write_navigation_check(runs, table: pd.DataFrame, out_dir: str | Path, name: str) -> None:
     """The check's table (CSV, Markdown) and plot."""
     out_dir = Path(out_dir)
-    write_frame(table, out_dir / f"{name}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration",
+    stem = safe_stem(name)
+    write_frame(table, out_dir / f"{stem}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration",
                 display=display(table, sigmas=float_columns(table)))
-    plot_navigation_check(runs, out_dir / f"{name}-navcheck.png",
+    plot_navigation_check(runs, out_dir / f"{stem}-navcheck.png",
                           f"{name}: horizontal position error, static base, after alignment")

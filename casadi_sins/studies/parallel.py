@@ -7,9 +7,14 @@ them, and exit by themselves if the parent dies.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
+import re
 from typing import Callable, Iterable, Sequence
 
+from ..core.errors import InputError
+from ..core.text import one_line
 from ..core.threads import single_threaded
 
 
@@ -49,9 +54,24 @@ def _on_processes(task: Callable, items: list, workers: int):
 
     # spawned workers that ignore Ctrl-C and SIGTERM from the terminal: the parent handles them, terminates
     # the workers (the pool's exit) and reports
-    with multiprocessing.get_context("spawn").Pool(workers, initializer=_worker_setup, initargs=(os.getpid(),)) \
-            as pool:
+    with _children_ignore_ctrl_c():  # a Ctrl-C while a worker is still starting is ignored there too
+        pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_worker_setup, initargs=(os.getpid(),))
+    with pool:
         yield from pool.imap_unordered(task, items)
+
+
+def check_scheduler(scheduler: str | None) -> None:
+    """Refuse a ``--dask`` value that is neither ``"local"`` nor a scheduler address (before any work).
+
+    Raises
+    ------
+    InputError
+        One line naming the value.
+    """
+    if scheduler and scheduler != "local" and not re.fullmatch(
+            r"(tcp|tls|inproc|ucx|ws|wss)://[^\s/]+(:\d+)?/?|[\w.-]+:\d+", scheduler):
+        raise InputError(None, f"--dask {one_line(repr(scheduler), 80)}: not a scheduler address "
+                         "(tcp://host:8786) nor 'local'")
 
 
 def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
@@ -59,12 +79,20 @@ def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
         from dask.distributed import Client, LocalCluster
         from dask.distributed import as_completed as dask_completed
     except ImportError:
-        raise RuntimeError("a Dask scheduler was given but dask.distributed is not installed: "
-                           "pip install 'casadi-sins[cluster]'") from None
-    cluster = (LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                            dashboard_address=None) if scheduler == "local" else None)
+        raise InputError(None, f"--dask {one_line(scheduler, 80)}: dask.distributed is not installed: "
+                         "pip install 'casadi-sins[cluster]'") from None
+    check_scheduler(scheduler)
+    with _children_ignore_ctrl_c():
+        cluster = (LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                                dashboard_address=None, silence_logs=logging.CRITICAL)
+                   if scheduler == "local" else None)
     try:
-        with Client(cluster if cluster is not None else scheduler) as client:
+        try:
+            client = Client(cluster if cluster is not None else scheduler, timeout="20s")
+        except (OSError, ValueError, TypeError) as exc:
+            raise InputError(None, f"--dask {one_line(scheduler, 80)}: cannot reach the scheduler "
+                             f"({one_line(exc, 200)})") from None
+        with client:
             futures = [client.submit(task, item, pure=False) for item in items]
             try:
                 for future in dask_completed(futures):
@@ -74,6 +102,23 @@ def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
     finally:
         if cluster is not None:
             cluster.close()
+
+
+@contextlib.contextmanager
+def _children_ignore_ctrl_c():
+    """Processes started in the block inherit an ignored SIGINT (kept across ``exec``): a Ctrl-C on the
+    terminal reaches the whole process group, and only the parent reports it."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _worker_setup(parent: int) -> None:

@@ -24,6 +24,7 @@ from ..core.units import ARW_UNIT, VRW_UNIT
 from ..data.description import read_recording
 from ..data.problem import Problem, load_problem
 from ..data.recording import Recording
+from ..core.files import safe_stem
 from ..data.tables import write_table
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet
@@ -189,9 +190,10 @@ def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.Dat
     """Write each prediction's table and the comparison (CSV, Markdown, PNG); returns the comparison."""
     out_dir = Path(out_dir)
     for pred in predictions:
-        write_table(out_dir / f"{pred.name}-predicted.csv", pred.nominal)
+        stem = safe_stem(pred.name)  # a recording's name may be "../../x" or absolute: never a path
+        write_table(out_dir / f"{stem}-predicted.csv", pred.nominal)
         frame = pred.frame()
-        write_frame(frame, out_dir / f"{pred.name}-predicted-natural",
+        write_frame(frame, out_dir / f"{stem}-predicted-natural",
                     f"{pred.name}: predicted 1-sigma at {describe_noise(pred.noise)}",
                     display=display(frame, {"value": "sigma"}, sigmas=["sigma (natural)"]))
     table = comparison_frame(predictions)
@@ -199,5 +201,5 @@ def write_analysis(predictions: list[Prediction], out_dir: str | Path) -> pd.Dat
         write_frame(table, out_dir / "schedules-predicted", "Predicted 1-sigma per schedule (natural units)",
                     display=analysis_display(table))
     plot_predictions(predictions, out_dir / ("schedules-predicted.png" if len(predictions) > 1
-                                             else f"{predictions[0].name}-predicted.png"))
+                                             else f"{safe_stem(predictions[0].name)}-predicted.png"))
     return table

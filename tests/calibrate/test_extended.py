@@ -36,7 +36,9 @@ def test_extra_rows_follow_the_21_and_read_back(tmp_path):
     names = R.model_names(("quadratic", "timing"))
     assert names[:21] == R.NAMES and names[21:] == ("accel_quadratic_x", "accel_quadratic_y", "accel_quadratic_z",
                                                      "accel_time_offset")
-    params = ParameterSet(np.r_[np.arange(1.0, 22.0), 1e-6, 2e-6, 3e-6, 1e-3], names=names)
+    core = np.arange(1.0, 22.0) * 1e-4  # a table must be usable for compensation (issue 24): K near I
+    core[R.ACCEL_SCALE], core[R.GYRO_SCALE] = 3.5e-4, 1e-7
+    params = ParameterSet(np.r_[core, 1e-6, 2e-6, 3e-6, 1e-3], names=names)
     path = write_table(tmp_path / "t.csv", params)
     text = path.read_text().splitlines()
     assert text[22].startswith("accel_quadratic_x,s^2/m,") and text[-1].startswith("accel_time_offset,s,0.001")

@@ -13,10 +13,13 @@ import csv
 import io
 import math
 import random
+import re
 
 import numpy as np
 
 COLUMNS = ("time", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+#: The format's numbers: plain ASCII decimal (no ``1_000``, no other scripts' digits, no hex, no inf/nan).
+PLAIN = re.compile(r"\s*[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?\s*")
 
 
 def oracle(text: str) -> np.ndarray | None:
@@ -38,10 +41,9 @@ def oracle(text: str) -> np.ndarray | None:
             continue
         if len(row) != len(header):
             return None
-        try:
-            values = [float(row[j]) for j in take]
-        except ValueError:
+        if not all(PLAIN.fullmatch(row[j]) for j in take):
             return None
+        values = [float(row[j]) for j in take]
         if not all(math.isfinite(v) for v in values):
             return None
         out.append(values)
@@ -95,7 +97,8 @@ def _replace_field(lines, rng):
     k = _data_line(lines, rng)
     fields = lines[k].split(",")
     fields[rng.randrange(len(fields))] = rng.choice(["nan", "inf", "-inf", "", "1e309", "abc", "0x10", "1_000",
-                                                     "  7", "1e300", "-0", "+3", "\"2.5\""])
+                                                     "  7", "1e300", "-0", "+3", "\"2.5\"", "١٢٣", "１２３",
+                                                     "1e160"])
     lines[k] = ",".join(fields)
 
 

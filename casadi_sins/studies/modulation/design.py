@@ -30,7 +30,7 @@ from ...core.earth import Site
 from ...core.errors import InputError
 from . import model as M
 from .covariance import check_run
-from .schemes import Piece, Scheme, Step, closure_error
+from .schemes import Piece, Scheme, Step
 from .sources import Sources
 from .tilt import mean_radius, piece_moments
 

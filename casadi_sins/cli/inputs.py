@@ -1,0 +1,48 @@
+"""The input files a command line names: every argument that is an existing file, and the CSV of
+samples each recording description among them points to (so that no output lands on either)."""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+
+#: Arguments that name outputs or are not files.
+NOT_INPUTS = {"out", "report", "func", "command", "dask", "name", "export", "format"}
+#: A description is a few kilobytes; larger TOML files are not looked into here.
+MAX_LOOK_BYTES = 4_000_000
+
+
+def command_inputs(args) -> list:
+    """Every existing file named by ``args`` (output options excepted), and the ``data`` file of each
+    TOML among them (a recording description's CSV, relative to the description, as ``(path, role)``)."""
+    found: list = []
+    for key, value in vars(args).items():
+        if key in NOT_INPUTS:
+            continue
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(item, (str, Path)) and str(item) and _is_file(item):
+                found.append(str(item))
+                found.extend(_described_data(Path(item)))
+    return found
+
+
+def _is_file(path) -> bool:
+    try:
+        return os.path.isfile(path)
+    except (OSError, ValueError):
+        return False
+
+
+def _described_data(path: Path) -> list[tuple[str, str]]:
+    """The ``data`` file a TOML description names, when it is one (else nothing; its reader judges it)."""
+    if path.suffix.lower() != ".toml":
+        return []
+    try:
+        if os.path.getsize(path) > MAX_LOOK_BYTES:
+            return []
+        doc = tomllib.loads(path.read_bytes().decode("utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError, RecursionError):
+        return []
+    data = doc.get("data")
+    return [(str(path.parent / data), f"the samples of {path}")] if isinstance(data, str) and data.strip() else []

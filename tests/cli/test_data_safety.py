@@ -194,7 +194,8 @@ def test_no_fleet_cell_is_a_spreadsheet_formula(tmp_path):
     ids = ["=cmd|' /C calc'!A0", "+1", "@SUM(A1)", "-2", "SN 1"]
     fleet = pd.DataFrame({"unit_id": ids, "recording": [f"={i}.toml" for i in range(5)], "status": "ok",
                           "warnings": 0, "message": ["=HYPERLINK(x)"] * 5})
-    spread = pd.DataFrame({"parameter": ["accel_bias_x"], "outliers": [" ".join(ids)]})
+    spread = pd.DataFrame([{c: float("nan") for c in batch.SPREAD_COLUMNS}])
+    spread[["parameter", "unit", "outliers"]] = ["accel_bias_x", "ug", " ".join(ids)]
     files = batch.batch_files(fleet, spread, tmp_path)
     for path, data in files.items():
         if path.suffix == ".csv":

@@ -24,7 +24,7 @@ from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
 FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
-                  "modulate-mc", "apply", "history", "batch"}
+                  "modulate-mc", "apply", "history", "batch", "design"}
 
 __all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
 

@@ -8,6 +8,7 @@ from ..core.version import __version__
 from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_export, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_simulate, cmd_validate)
+from .design import add_design_command
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 
@@ -147,6 +148,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.set_defaults(func=cmd_demo)
     _add_modulation(sub)
     add_production_commands(sub)
+    add_design_command(sub)
     return parser
 
 

@@ -1,0 +1,162 @@
+"""The design search: orientation sequences by simulated annealing, then the dwell times by gradient.
+
+1. Seeds: the input schedule re-timed to the limits (on a three-axis table), and random designs with
+   about as many turns as the input has.  Every candidate is scored with its statics sharing the time
+   budget equally (:func:`space.equal_statics`), by the criterion on the predicted covariance
+   (:mod:`.criteria`).
+2. Each seed starts a chain of simulated annealing over the moves of :mod:`.moves` (one change at a
+   time; worse candidates accepted with probability ``exp(-delta / T)``, ``T`` falling geometrically
+   from ``T_START`` to ``T_END``); the best candidate of all chains is kept.
+3. The best few orientation sequences get their dwell times optimised (:mod:`.dwell`); the best
+   result is the design.
+
+Every prediction is deterministic (noise-free simulation at the problem's truth), so a cache by
+schedule avoids repeating one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+import numpy as np
+
+from ...data.problem import Problem
+from .criteria import Criterion, Score
+from .dwell import optimise_dwell
+from .moves import from_problem, move, random_design
+from .space import DesignError, GroupDesign, Limits, design_problem, equal_statics, minimum_rests, split
+
+T_START, T_END = 0.03, 0.002
+
+
+@dataclasses.dataclass
+class Candidate:
+    """A schedule: its orientation sequence, static durations and score."""
+
+    groups: tuple[GroupDesign, ...]
+    statics: list[np.ndarray]
+    score: Score
+
+
+class Designer:
+    """Scores schedules of one problem under one set of limits and one criterion (cached)."""
+
+    def __init__(self, base: Problem, limits: Limits, criterion: Criterion):
+        self.base, self.limits, self.criterion = base, limits, criterion
+        self.cache: dict = {}
+
+    def problem(self, groups, statics, name=None) -> Problem:
+        return design_problem(self.base, groups, statics, self.limits, name)
+
+    def evaluate(self, groups: tuple[GroupDesign, ...], statics: list[np.ndarray] | None = None) -> Candidate:
+        """Score a schedule (equal statics unless given)."""
+        statics = equal_statics(groups, self.limits) if statics is None else statics
+        key = (groups, tuple(np.round(np.concatenate(statics), 1)))
+        if key not in self.cache:
+            try:
+                score = self.criterion.score(self.problem(groups, statics))
+            except (ValueError, np.linalg.LinAlgError):  # a schedule the estimator cannot use
+                score = None
+            self.cache[key] = score
+        score = self.cache[key]
+        if score is None:
+            return Candidate(groups, statics, Score(None, np.full(1, np.inf), np.inf, np.inf))
+        return Candidate(groups, statics, score)
+
+    def seeds(self, rng: np.random.Generator, chains: int) -> list[Candidate]:
+        """The input schedule (if the table can make it) and random designs."""
+        out = []
+        own = from_problem(self.base, self.limits)
+        if own is not None:
+            out.append(self.evaluate(own))
+        n_turns = max(sum(len(g.rotations) for g in self.base.groups), 3)
+        n_groups = 1 if self.limits.table_axes == 3 else {1: 3, 2: 2}[self.limits.table_axes]
+        tries = 0
+        while len(out) < chains and tries < 50 * chains:
+            tries += 1
+            groups = random_design(rng, self.limits, int(rng.integers(max(2, n_turns // 2), 2 * n_turns + 1)),
+                                   n_groups)
+            if groups is not None:
+                out.append(self.evaluate(groups))
+        if not out:
+            raise DesignError("no schedule fits: the time budget is too short for the turns, rests and handling")
+        return out
+
+    def anneal(self, start: Candidate, rng: np.random.Generator, evaluations: int,
+               progress: Callable[[Candidate], None]) -> Candidate:
+        """One chain of simulated annealing from ``start``; the best candidate it met."""
+        current = best = start
+        for k in range(evaluations):
+            temperature = T_START * (T_END / T_START) ** (k / max(evaluations - 1, 1))
+            groups = None
+            for _ in range(20):
+                groups = move(current.groups, rng, self.limits)
+                if groups is not None:
+                    break
+            if groups is None:
+                continue
+            cand = self.evaluate(groups)
+            delta = cand.score.objective - current.score.objective
+            if delta < 0 or rng.random() < np.exp(-delta / temperature):
+                current = cand
+            if cand.score.objective < best.score.objective:
+                best = cand
+            progress(best)
+        return best
+
+    def dwell(self, cand: Candidate, iterations: int, progress: Callable[[str], None] | None) -> Candidate:
+        """Optimise a candidate's dwell times."""
+        low = np.concatenate(minimum_rests(cand.groups, self.limits))
+
+        def objective(flat):
+            return self.evaluate(cand.groups, split(flat, cand.groups)).score.objective
+
+        flat, _ = optimise_dwell(np.concatenate(cand.statics), low, objective, iterations, progress)
+        return self.evaluate(cand.groups, split(flat, cand.groups))
+
+
+def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int = 300, chains: int = 3,
+           seed: int = 0, dwell_iterations: int = 6, finalists: int = 2,
+           progress: Callable[[str], None] | None = None) -> Candidate:
+    """Search a schedule for ``base``'s unit under ``limits`` minimising ``criterion``.
+
+    Parameters
+    ----------
+    evaluations : int
+        Orientation sequences scored in all (spread over ``chains`` chains).
+    finalists : int
+        Best distinct sequences whose dwell times are optimised.
+
+    Raises
+    ------
+    DesignError
+        When no schedule fits the limits.
+    """
+    say = progress or (lambda text: None)
+    designer = Designer(base, limits, criterion)
+    rng = np.random.default_rng(seed)
+    seeds = designer.seeds(rng, chains)
+    found: list[Candidate] = []
+    done = [0]
+    overall = [min(seeds, key=lambda c: c.score.objective)]
+
+    def report(best: Candidate) -> None:
+        done[0] += 1
+        if best.score.objective < overall[0].score.objective:
+            overall[0] = best
+        if done[0] % 25 == 0 or done[0] == evaluations:
+            top = overall[0].score
+            say(f"orientation search: {done[0]}/{evaluations} schedules, best objective {top.objective:+.4f} "
+                f"(geometric-mean sigma ratio {top.geometric_mean:.3f}, worst {top.ratios.max():.3f})")
+
+    per_chain = max(1, evaluations // len(seeds))
+    for start in seeds:
+        found.append(designer.anneal(start, rng, per_chain, report))
+    found.sort(key=lambda c: c.score.objective)
+    distinct = list({c.groups: c for c in found}.values())[:finalists]
+    finals = [designer.dwell(c, dwell_iterations, say) for c in distinct]
+    best = min(finals + found, key=lambda c: c.score.objective)
+    if not np.isfinite(best.score.objective):
+        raise DesignError("no schedule found that the estimator can use under these limits")
+    return best

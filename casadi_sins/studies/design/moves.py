@@ -2,7 +2,8 @@
 
 A schedule's orientation sequence is a tuple of :class:`space.GroupDesign`; a move changes one thing
 (one turn's axis, sense or angle, a turn inserted or removed, two turns swapped, a group's start or
-mount, a group added or removed on tables that need remounting) and returns a new tuple, or ``None``
+mount, a group added on tables that need remounting, a group removed or joined to the next by one more
+turn) and returns a new tuple, or ``None``
 when the result breaks a constraint (the shortest statics no longer fit, a mount the table cannot hold).
 """
 
@@ -72,7 +73,9 @@ def move(groups: tuple[GroupDesign, ...], rng: np.random.Generator, limits: Limi
     """One random change of a design; ``None`` if the result breaks a constraint."""
     kinds = ["turn", "turn", "sense", "insert", "delete", "swap", "start"]
     if limits.table_axes < 3:
-        kinds += ["mount", "add group", "remove group"]
+        kinds += ["mount", "add group"]
+    if len(groups) > 1:
+        kinds += ["merge", "remove group"]
     kind = str(rng.choice(kinds))
     gi = int(rng.integers(len(groups)))
     group = groups[gi]
@@ -97,6 +100,10 @@ def move(groups: tuple[GroupDesign, ...], rng: np.random.Generator, limits: Limi
     elif kind == "add group":
         new = random_group(rng, limits, max(1, len(turns)))
         out = groups[: gi + 1] + (new,) + groups[gi + 1:]
+        return out if fits(out, limits) else None
+    elif kind == "merge" and gi + 1 < len(groups) and (limits.table_axes == 3 or group.mount == groups[gi + 1].mount):
+        joined = _with_turns(group, turns + [random_turn(rng, limits)] + list(groups[gi + 1].turns))
+        out = groups[:gi] + (joined,) + groups[gi + 2:]
         return out if fits(out, limits) else None
     elif kind == "remove group" and len(groups) > 1:
         out = groups[:gi] + groups[gi + 1:]

@@ -1,7 +1,7 @@
 """The design search: orientation sequences by simulated annealing, then the dwell times by gradient.
 
-1. Seeds: the input schedule re-timed to the limits (on a three-axis table), and random designs with
-   about as many turns as the input has.  Every candidate is scored with its statics sharing the time
+1. Seeds: the input schedule and the published 19-position scheme re-timed to the limits (on a
+   three-axis table), and random designs with about as many turns as the input has.  Every candidate is scored with its statics sharing the time
    budget equally (:func:`space.equal_statics`), by the criterion on the predicted covariance
    (:mod:`.criteria`).
 2. Each seed starts a chain of simulated annealing over the moves of :mod:`.moves` (one change at a
@@ -21,13 +21,21 @@ from typing import Callable
 
 import numpy as np
 
-from ...data.problem import Problem
+from ...data.problem import Problem, default_problem_path, load_problem
 from .criteria import Criterion, Score
 from .dwell import optimise_dwell
 from .moves import from_problem, move, random_design
 from .space import DesignError, GroupDesign, Limits, design_problem, equal_statics, minimum_rests, split
 
 T_START, T_END = 0.03, 0.002
+#: Published schedules shipped with the package that seed the search too (on a three-axis table).
+PUBLISHED = ("xie2011-19pos.toml",)
+
+
+def published_schedules() -> list[Problem]:
+    """The shipped published schedules (:data:`PUBLISHED`) as problems."""
+    folder = default_problem_path().parent
+    return [load_problem(folder / name) for name in PUBLISHED]
 
 
 @dataclasses.dataclass
@@ -52,7 +60,7 @@ class Designer:
     def evaluate(self, groups: tuple[GroupDesign, ...], statics: list[np.ndarray] | None = None) -> Candidate:
         """Score a schedule (equal statics unless given)."""
         statics = equal_statics(groups, self.limits) if statics is None else statics
-        key = (groups, tuple(np.round(np.concatenate(statics), 1)))
+        key = (groups, tuple(np.floor(np.concatenate(statics) * 10.0 + 1e-6)))
         if key not in self.cache:
             try:
                 score = self.criterion.score(self.problem(groups, statics))
@@ -67,9 +75,10 @@ class Designer:
     def seeds(self, rng: np.random.Generator, chains: int) -> list[Candidate]:
         """The input schedule (if the table can make it) and random designs."""
         out = []
-        own = from_problem(self.base, self.limits)
-        if own is not None:
-            out.append(self.evaluate(own))
+        for problem in (self.base, *published_schedules()):
+            own = from_problem(problem, self.limits)
+            if own is not None and own not in [c.groups for c in out]:
+                out.append(self.evaluate(own))
         n_turns = max(sum(len(g.rotations) for g in self.base.groups), 3)
         n_groups = 1 if self.limits.table_axes == 3 else {1: 3, 2: 2}[self.limits.table_axes]
         tries = 0
@@ -117,7 +126,7 @@ class Designer:
 
 
 def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int = 300, chains: int = 3,
-           seed: int = 0, dwell_iterations: int = 6, finalists: int = 2,
+           seed: int = 0, dwell_iterations: int = 4, finalists: int = 1,
            progress: Callable[[str], None] | None = None) -> Candidate:
     """Search a schedule for ``base``'s unit under ``limits`` minimising ``criterion``.
 

@@ -93,8 +93,8 @@ class Limits:
     profile: str = "half-sine"
 
     def rotation_s(self, angle_deg: float) -> float:
-        """Time of a turn of ``angle_deg`` at the rate limit (peak rate = limit)."""
-        return PEAK_PER_MEAN[self.profile] * angle_deg / self.max_rate_deg_s
+        """Time of a turn of ``angle_deg`` at the rate limit (peak rate = limit), rounded up to 1 ms."""
+        return math.ceil(PEAK_PER_MEAN[self.profile] * angle_deg / self.max_rate_deg_s * 1000.0 - 1e-6) / 1000.0
 
     def table_turn_axes(self) -> tuple[str, ...]:
         """The table axes a turn can be about."""
@@ -184,9 +184,10 @@ def split(flat: np.ndarray, groups: tuple[GroupDesign, ...]) -> list[np.ndarray]
 
 def design_problem(base: Problem, groups: tuple[GroupDesign, ...], statics: list[np.ndarray], limits: Limits,
                    name: str | None = None) -> Problem:
-    """The design as a problem: ``base``'s unit, noise, site and truth with the designed schedule."""
-    plans = tuple(group_plan(g, np.round(t, 1)) for g, t in zip(groups, statics))
-    timing = dataclasses.replace(base.timing, rotation_s=round(turn_time(groups, limits), 3),
+    """The design as a problem: ``base``'s unit, noise, site and truth with the designed schedule (statics
+    rounded down to 0.1 s, so the whole stays within the budget)."""
+    plans = tuple(group_plan(g, np.floor(np.asarray(t) * 10.0 + 1e-6) / 10.0) for g, t in zip(groups, statics))
+    timing = dataclasses.replace(base.timing, rotation_s=turn_time(groups, limits),
                                  gap_s=float(limits.handling_s) if len(groups) > 1 else 0.0, first_static_s=None,
                                  static_s=float(np.mean(np.concatenate(statics))))
     return dataclasses.replace(base, name=name or f"{base.name}-design", groups=plans, timing=timing, source=None,

@@ -48,7 +48,8 @@ def add_design_command(sub) -> None:
                    help="orientation sequences scored by the search (default 300; each about 0.5 s)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the search (default 0)")
     p.add_argument("--verify", type=int, default=0, metavar="N",
-                   help="Monte Carlo of the design: N simulated recordings calibrated with the NLP")
+                   help="Monte Carlo of the design: N simulated recordings (seeds from 10000, as montecarlo) "
+                   "calibrated with both solvers; files in OUT/verify/")
     p.add_argument("--workers", type=int, help="local processes of the Monte Carlo (default one per core)")
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=cmd_design)
@@ -77,8 +78,9 @@ def cmd_design(args) -> int:
     print(f"predicted sigma against {base.name}: geometric mean {score.geometric_mean:.3f}, worst "
           f"{score.ratios.max():.3f}; criterion {args.criterion} {score.value:+.4f}")
     if result.verify is not None:
-        s = result.verify
-        print(f"Monte Carlo: RMS error / sigma {s['rms_over_sigma'].min():.2f}-{s['rms_over_sigma'].max():.2f}, "
-              f"/ predicted {s['rms_over_predicted'].min():.2f}-{s['rms_over_predicted'].max():.2f}")
+        for solver, s in result.verify.groupby("solver", sort=False):
+            print(f"Monte Carlo {solver}: RMS error / sigma {s['rms_over_sigma'].min():.2f}-"
+                  f"{s['rms_over_sigma'].max():.2f}, / predicted {s['rms_over_predicted'].min():.2f}-"
+                  f"{s['rms_over_predicted'].max():.2f}")
     print(f"wrote {args.out}/design.toml, design.md, design.png ({result.seconds:.0f} s)")
     return 0

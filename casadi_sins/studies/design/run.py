@@ -99,17 +99,24 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
     return DesignRun(best, problem, files, summary, seconds)
 
 
+#: The Monte Carlo's seeds start where ``montecarlo``'s do, so ``--verify N`` and ``montecarlo --runs N`` agree.
+FIRST_SEED = 10000
+SOLVERS = ("nlp", "ils")
+
+
 def _verify(problem: Problem, best: Candidate, runs: int, workers, out: Path, say):
-    """Monte Carlo of the design with the NLP (:mod:`studies.montecarlo`): RMS error against sigma."""
-    say(f"verifying: {runs} simulated recordings of the design, each calibrated (NLP)")
+    """Monte Carlo of the design (:mod:`studies.montecarlo`, both solvers): RMS error against sigma."""
+    say(f"verifying: {runs} simulated recordings of the design, each calibrated ({', '.join(SOLVERS)})")
     t0 = time.perf_counter()
-    rows = MC.run(problem, range(runs), ("nlp",), workers)
+    rows = MC.run(problem, range(FIRST_SEED, FIRST_SEED + runs), SOLVERS, workers)
     elapsed = time.perf_counter() - t0
     summary = MC.with_prediction(MC.summary(rows), best.score.prediction.sigma_natural)
     files = MC.montecarlo_files(problem, rows, summary, out / "verify", runs, elapsed)
-    low, high = summary["rms_over_sigma"].min(), summary["rms_over_sigma"].max()
-    lowp, highp = summary["rms_over_predicted"].min(), summary["rms_over_predicted"].max()
     failed = int((rows["failed"] != "").sum()) if "failed" in rows else 0
-    line = (f"- Monte Carlo of the design ({runs} runs, NLP, {failed} failed; verify/): RMS error / solver's sigma "
-            f"{low:.2f}-{high:.2f}, RMS error / predicted sigma {lowp:.2f}-{highp:.2f}")
+    parts = []
+    for solver, part in summary.groupby("solver", sort=False):
+        parts.append(f"{solver}: RMS error / solver's sigma {part['rms_over_sigma'].min():.2f}-"
+                     f"{part['rms_over_sigma'].max():.2f}, / predicted sigma {part['rms_over_predicted'].min():.2f}-"
+                     f"{part['rms_over_predicted'].max():.2f}")
+    line = f"- Monte Carlo of the design ({runs} runs, {failed} failed; verify/): " + "; ".join(parts)
     return summary, files, line

@@ -26,3 +26,5 @@ python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 #
 python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchmark.txt"   # issue 16's worlds, no datasheet
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
 python benchmarks/bench_mutations.py --out "$out"                                          # hostile input (issue 17)
+casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
+python benchmarks/bench_design.py --budgets 30 100 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality

@@ -42,8 +42,8 @@ def add_design_command(sub) -> None:
                    help="shortest first static of a group (its alignment), s (default 60)")
     p.add_argument("--handling-s", type=float, default=60.0,
                    help="time to handle the unit between groups, s; counts against --total-s (default 60)")
-    p.add_argument("--cap", type=float, default=1.05,
-                   help="a parameter's sigma above this times the input's is penalised (default 1.05)")
+    p.add_argument("--cap", type=float, default=1.1,
+                   help="a parameter's sigma above this times the input's is penalised (default 1.1)")
     p.add_argument("--evaluations", type=int, default=300,
                    help="orientation sequences scored by the search (default 300; each about 0.5 s)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the search (default 0)")

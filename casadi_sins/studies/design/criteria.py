@@ -84,7 +84,7 @@ class Criterion:
         Navigation time of the ``navigation`` criterion.
     """
 
-    def __init__(self, kind: str, reference: Problem, model: str = "21", cap: float = 1.05, hours: float = 1.0):
+    def __init__(self, kind: str, reference: Problem, model: str = "21", cap: float = 1.1, hours: float = 1.0):
         if kind not in CRITERIA:
             raise ValueError(f"criterion must be one of {', '.join(CRITERIA)}")
         self.kind, self.model, self.cap, self.hours = kind, model, cap, hours

@@ -68,7 +68,7 @@ def markdown(base: Problem, design: Problem, ref_score: Score, score: Score, set
     names, units = score.prediction.nominal.names, score.prediction.nominal.natural_units
     sig = sigma_frame(names, units, ref_score, score, base.name)
     times = pd.DataFrame([{"schedule": p.name, **{k: round(v, 1) for k, v in time_split(p).items()},
-                           "statics": len([s for s in p.segments() if s.is_static])} for p in (base, design)])
+                           "positions": len([s for s in p.segments() if s.is_static])} for p in (base, design)])
     lines = [f"# Designed calibration schedule for {base.name}", "",
              "Predicted 1-sigma from the same error model as `analyze` (covariance of the NLP's linearisation "
              "whitened by the stated noise), natural units.", "",

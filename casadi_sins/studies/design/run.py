@@ -59,7 +59,7 @@ def default_rate(base: Problem) -> float:
 
 
 def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str = "21", hours: float = 1.0,
-               cap: float = 1.05, evaluations: int = 300, seed: int = 0, verify_runs: int = 0, workers=None,
+               cap: float = 1.1, evaluations: int = 300, seed: int = 0, verify_runs: int = 0, workers=None,
                out_dir: str | Path = ".", progress: Callable[[str], None] | None = None) -> DesignRun:
     """Design a schedule for ``base``'s unit and prepare ``design.toml``, ``design.md`` and ``design.png``
     (and with ``verify_runs`` a Monte Carlo of the design, its files under ``verify/``)."""

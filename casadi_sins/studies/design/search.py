@@ -1,14 +1,14 @@
 """The design search: orientation sequences by simulated annealing, then the dwell times by gradient.
 
-1. Seeds: the input schedule and the published 19-position scheme re-timed to the limits (on a
-   three-axis table), and random designs with about as many turns as the input has.  Every candidate is scored with its statics sharing the time
-   budget equally (:func:`space.equal_statics`), by the criterion on the predicted covariance
-   (:mod:`.criteria`).
-2. Each seed starts a chain of simulated annealing over the moves of :mod:`.moves` (one change at a
-   time; worse candidates accepted with probability ``exp(-delta / T)``, ``T`` falling geometrically
-   from ``T_START`` to ``T_END``); the best candidate of all chains is kept.
-3. The best few orientation sequences get their dwell times optimised (:mod:`.dwell`); the best
-   result is the design.
+1. Screening: the input schedule and the published 19-position scheme re-timed to the limits (on a
+   three-axis table), and random designs with between half and twice as many turns as the input
+   (``SCREEN_SHARE`` of the evaluations).  Every candidate is scored with its statics sharing the
+   time budget equally (:func:`space.equal_statics`), by the criterion on the predicted covariance
+   (:mod:`.criteria`).  Random designs are a strong start: the criterion varies widely between them.
+2. From the input, the published schedule and the best ``chains`` random ones a chain of simulated
+   annealing runs over the moves of :mod:`.moves` (one change at a time; worse candidates accepted with probability
+   ``exp(-delta / T)``, ``T`` falling geometrically from ``T_START`` to ``T_END``).
+3. The best orientation sequence found gets its dwell times optimised (:mod:`.dwell`).
 
 Every prediction is deterministic (noise-free simulation at the problem's truth), so a cache by
 schedule avoids repeating one.
@@ -28,6 +28,8 @@ from .moves import from_problem, move, random_design
 from .space import DesignError, GroupDesign, Limits, design_problem, equal_statics, minimum_rests, split
 
 T_START, T_END = 0.03, 0.002
+#: Share of the evaluations spent screening random designs before the annealing starts from the best.
+SCREEN_SHARE = 0.25
 #: Published schedules shipped with the package that seed the search too (on a three-axis table).
 PUBLISHED = ("xie2011-19pos.toml",)
 
@@ -72,25 +74,28 @@ class Designer:
             return Candidate(groups, statics, Score(None, np.full(1, np.inf), np.inf, np.inf))
         return Candidate(groups, statics, score)
 
-    def seeds(self, rng: np.random.Generator, chains: int) -> list[Candidate]:
-        """The input schedule (if the table can make it) and random designs."""
-        out = []
+    def seeds(self, rng: np.random.Generator, count: int) -> list[Candidate]:
+        """The input schedule and the published ones (if the table can make them), and ``count`` random
+        designs, best first."""
+        own = []
         for problem in (self.base, *published_schedules()):
-            own = from_problem(problem, self.limits)
-            if own is not None and own not in [c.groups for c in out]:
-                out.append(self.evaluate(own))
+            groups = from_problem(problem, self.limits)
+            if groups is not None and groups not in [c.groups for c in own]:
+                own.append(self.evaluate(groups))
+        out = []
         n_turns = max(sum(len(g.rotations) for g in self.base.groups), 3)
         n_groups = 1 if self.limits.table_axes == 3 else {1: 3, 2: 2}[self.limits.table_axes]
-        tries = 0
-        while len(out) < chains and tries < 50 * chains:
+        tries, made = 0, 0
+        while made < count and tries < 50 * count:
             tries += 1
             groups = random_design(rng, self.limits, int(rng.integers(max(2, n_turns // 2), 2 * n_turns + 1)),
                                    n_groups)
             if groups is not None:
                 out.append(self.evaluate(groups))
-        if not out:
+                made += 1
+        if not out and not own:
             raise DesignError("no schedule fits: the time budget is too short for the turns, rests and handling")
-        return out
+        return own, sorted(out, key=lambda c: c.score.objective)
 
     def anneal(self, start: Candidate, rng: np.random.Generator, evaluations: int,
                progress: Callable[[Candidate], None]) -> Candidate:
@@ -125,7 +130,7 @@ class Designer:
         return self.evaluate(cand.groups, split(flat, cand.groups))
 
 
-def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int = 300, chains: int = 3,
+def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int = 300, chains: int = 1,
            seed: int = 0, dwell_iterations: int = 4, finalists: int = 1,
            progress: Callable[[str], None] | None = None) -> Candidate:
     """Search a schedule for ``base``'s unit under ``limits`` minimising ``criterion``.
@@ -145,22 +150,28 @@ def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int
     say = progress or (lambda text: None)
     designer = Designer(base, limits, criterion)
     rng = np.random.default_rng(seed)
-    seeds = designer.seeds(rng, chains)
-    found: list[Candidate] = []
+    screened = max(chains, int(SCREEN_SHARE * evaluations))
+    own, screened_designs = designer.seeds(rng, screened)
+    starts = own + screened_designs[:chains]  # the input's chain is kept: joining its groups may pay
+    seeds = sorted(starts + screened_designs[chains:], key=lambda c: c.score.objective)
+    say(f"screened {len(own) + len(screened_designs)} schedules (the input, published and random ones): best "
+        f"objective {seeds[0].score.objective:+.4f}; annealing from {len(starts)}")
+    found: list[Candidate] = list(starts)
     done = [0]
-    overall = [min(seeds, key=lambda c: c.score.objective)]
+    overall = [seeds[0]]
+    budget = max(evaluations - screened, chains)
 
     def report(best: Candidate) -> None:
         done[0] += 1
         if best.score.objective < overall[0].score.objective:
             overall[0] = best
-        if done[0] % 25 == 0 or done[0] == evaluations:
+        if done[0] % 25 == 0 or done[0] == budget:
             top = overall[0].score
-            say(f"orientation search: {done[0]}/{evaluations} schedules, best objective {top.objective:+.4f} "
+            say(f"orientation search: {done[0]}/{budget} schedules, best objective {top.objective:+.4f} "
                 f"(geometric-mean sigma ratio {top.geometric_mean:.3f}, worst {top.ratios.max():.3f})")
 
-    per_chain = max(1, evaluations // len(seeds))
-    for start in seeds:
+    per_chain = max(1, budget // len(starts))
+    for start in starts:
         found.append(designer.anneal(start, rng, per_chain, report))
     found.sort(key=lambda c: c.score.objective)
     distinct = list({c.groups: c for c in found}.values())[:finalists]

@@ -74,7 +74,7 @@ class Designer:
             return Candidate(groups, statics, Score(None, np.full(1, np.inf), np.inf, np.inf))
         return Candidate(groups, statics, score)
 
-    def seeds(self, rng: np.random.Generator, count: int) -> list[Candidate]:
+    def seeds(self, rng: np.random.Generator, count: int) -> tuple[list[Candidate], list[Candidate]]:
         """The input schedule and the published ones (if the table can make them), and ``count`` random
         designs, best first."""
         own = []

@@ -27,4 +27,4 @@ python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchm
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
 python benchmarks/bench_mutations.py --out "$out"                                          # hostile input (issue 17)
 casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
-python benchmarks/bench_design.py --budgets 30 100 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality
+python benchmarks/bench_design.py --budgets 20 60 300 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality

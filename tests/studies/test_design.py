@@ -122,3 +122,16 @@ def test_cli_design_impossible_budget_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "too short" in err
     assert not out.exists()
+
+
+def test_a_schedule_leaving_an_accelerometer_axis_level_is_not_usable(small_problem):
+    """Turning about the vertical axis only never shows the level axes gravity: the calibration would refuse it."""
+    from casadi_sins.studies.design.search import Designer
+    from casadi_sins.studies.design.space import usable
+
+    level = (GroupDesign("NWU", "Z", (Turn("Z", 1, 90), Turn("Z", 1, 180))),)
+    tumbling = (GroupDesign("NWU", "Z", (Turn("X", 1, 90), Turn("Z", 1, 90))),)
+    assert not usable(level) and usable(tumbling)
+    limits = Limits(total_s=400, max_rate_deg_s=14.0)
+    designer = Designer(small_problem, limits, Criterion("d", small_problem))
+    assert designer.evaluate(level).score.objective == np.inf

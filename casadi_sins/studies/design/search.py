@@ -25,7 +25,7 @@ from ...data.problem import Problem, default_problem_path, load_problem
 from .criteria import Criterion, Score
 from .dwell import optimise_dwell
 from .moves import from_problem, move, random_design
-from .space import DesignError, GroupDesign, Limits, design_problem, equal_statics, minimum_rests, split
+from .space import DesignError, GroupDesign, Limits, design_problem, equal_statics, minimum_rests, split, usable
 
 T_START, T_END = 0.03, 0.002
 #: Share of the evaluations spent screening random designs before the annealing starts from the best.
@@ -63,6 +63,8 @@ class Designer:
         """Score a schedule (equal statics unless given)."""
         statics = equal_statics(groups, self.limits) if statics is None else statics
         key = (groups, tuple(np.floor(np.concatenate(statics) * 10.0 + 1e-6)))
+        if key not in self.cache and not usable(groups):  # the calibration would refuse it: not predicted
+            self.cache[key] = None
         if key not in self.cache:
             try:
                 score = self.criterion.score(self.problem(groups, statics))

@@ -133,6 +133,24 @@ def group_plan(group: GroupDesign, statics_s) -> GroupPlan:
     return GroupPlan(group.start, tuple(rotations), 90.0, tuple(float(t) for t in statics_s))
 
 
+def vertical_axes(groups: tuple[GroupDesign, ...]) -> set[int]:
+    """The body axes (0, 1, 2) that point up or down in some static position of a design."""
+    out = set()
+    for g in groups:
+        dcm = orientation_to_dcm(g.start)
+        out.add(int(np.argmax(np.abs(dcm[2]))))
+        for turn in g.turns:
+            dcm = np.round(rotate_body(dcm, body_axis(turn, g.mount, dcm), math.radians(turn.angle)))
+            out.add(int(np.argmax(np.abs(dcm[2]))))
+    return out
+
+
+def usable(groups: tuple[GroupDesign, ...]) -> bool:
+    """Whether the calibration can start from a design: every accelerometer axis sees gravity in some static
+    (the rough scale factors of :mod:`calibrate.initial` need it)."""
+    return len(vertical_axes(groups)) == 3
+
+
 def turn_time(groups: tuple[GroupDesign, ...], limits: Limits) -> float:
     """The time every turn of a design takes (s): the largest angle's at the rate limit."""
     angles = [t.angle for g in groups for t in g.turns]

@@ -114,7 +114,7 @@ class Designer:
                 continue
             cand = self.evaluate(groups)
             delta = cand.score.objective - current.score.objective
-            if delta < 0 or rng.random() < np.exp(-delta / temperature):
+            if not np.isfinite(current.score.objective) or delta < 0 or rng.random() < np.exp(-delta / temperature):
                 current = cand
             if cand.score.objective < best.score.objective:
                 best = cand
@@ -180,5 +180,6 @@ def design(base: Problem, limits: Limits, criterion: Criterion, evaluations: int
     finals = [designer.dwell(c, dwell_iterations, say) for c in distinct]
     best = min(finals + found, key=lambda c: c.score.objective)
     if not np.isfinite(best.score.objective):
-        raise DesignError("no schedule found that the estimator can use under these limits")
+        raise DesignError(f"no usable schedule found in {evaluations} evaluations (every accelerometer axis must point "
+                          "up or down in some static): give more --evaluations, or a longer --total-s")
     return best

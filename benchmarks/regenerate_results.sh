@@ -28,3 +28,5 @@ python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchm
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
 python benchmarks/bench_mutations.py --out "$out"                                          # hostile input (issue 17)
 python benchmarks/bench_thermal.py --seeds 1 2 3 --out "$out" | tee "$out/thermal-benchmark.txt"   # thermal model, a setpoint left out (issue 30), ~6 min
+casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
+python benchmarks/bench_design.py --budgets 20 60 300 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality

@@ -3,11 +3,13 @@
 
 from __future__ import annotations
 
+import sys
+
 from ..core.progress import Progress, progress_mode
 
 #: The commands that take long enough to report progress.
 LONG_COMMANDS = ("simulate", "calibrate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo",
-                 "modulate", "modulate-mc", "batch")
+                 "modulate", "modulate-mc", "batch", "design", "design-scheme")
 
 
 def add_log_options(p) -> None:
@@ -28,3 +30,11 @@ def progress_for(args, total: float, desc: str, unit: str = "step") -> Progress:
 def steps_printer(args):
     """``print`` for the library's step messages, or None with ``--quiet`` or ``--no-progress``."""
     return None if getattr(args, "quiet", False) or getattr(args, "no_progress", False) else print
+
+
+def message_printer(args, command: str):
+    """A progress-message callback for the long searches (``design``, ``design-scheme``): a line on standard
+    error, or nothing with ``--quiet`` or ``--no-progress``."""
+    if getattr(args, "quiet", False) or getattr(args, "no_progress", False):
+        return lambda message: None
+    return lambda message: print(f"{command}: {message}", file=sys.stderr, flush=True)

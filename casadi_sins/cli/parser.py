@@ -9,6 +9,7 @@ from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_validate)
 from .logs import LONG_COMMANDS, add_log_options
+from .design import add_design_command as add_schedule_design_command
 from .modulation import cmd_modulate, cmd_modulate_mc
 from .importing import add_import_parser
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
@@ -169,6 +170,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     add_thermal_command(sub)
     add_import_parser(sub)
     add_design_command(sub)
+    add_schedule_design_command(sub)
     for name in LONG_COMMANDS:
         add_log_options(sub.choices[name])
     for action in sub._choices_actions:  # each command's --help starts with its one-line description

@@ -3,7 +3,6 @@ write what it found.  No physics here."""
 
 from __future__ import annotations
 
-import sys
 
 from ..core.files import write_files
 from ..core.units import DEG
@@ -11,6 +10,7 @@ from ..studies.modulation.design import CRITERIA, Request
 from ..studies.modulation.design_report import design_files
 from ..studies.modulation.designer import design
 from .commands import CliError
+from .logs import message_printer
 from .modulation import _finite, site_and_sources
 
 
@@ -23,10 +23,8 @@ def cmd_design_scheme(args) -> int:
     site, sources = site_and_sources(args)
     req = Request(args.positions, args.axes, args.rate_deg_s * DEG, args.stop_s, args.hours, args.criterion)
 
-    def progress(message: str) -> None:
-        print(f"design-scheme: {message}", file=sys.stderr, flush=True)
-
-    result = design(req, sources, site, samples=args.samples, seed=args.seed, progress=progress)
+    result = design(req, sources, site, samples=args.samples, seed=args.seed,
+                    progress=message_printer(args, "design-scheme"))
     write_files(design_files(result, sources, site, args.out))
     print(f"designed {result.best.notation()} (first turn after {result.best.dwell0:g} s): {req.criterion} "
           f"{result.best.value:.4g} in {result.seconds:.1f} s")

@@ -1,0 +1,122 @@
+"""A design from start to files: limits from the input problem, the search, the report, the Monte Carlo."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ...data.problem import Problem
+from .. import montecarlo as MC
+from .criteria import Criterion, navigation_error
+from .problemfile import checked_text
+from .report import drawing, markdown
+from .search import Candidate, design
+from .space import DesignError, Limits, design_problem, peak_rate_deg_s
+
+
+@dataclasses.dataclass
+class DesignRun:
+    """What a design run produced: the design, its problem, the files to write, the Monte Carlo summary."""
+
+    best: Candidate
+    problem: Problem
+    files: dict
+    verify: object = None  # pandas summary of the Monte Carlo, if run
+    seconds: float = 0.0
+
+
+def check_limits(limits: Limits) -> None:
+    """One line for constraints no schedule can meet (or numbers that mean nothing)."""
+    for name in ("total_s", "max_rate_deg_s"):
+        value = getattr(limits, name)
+        if not np.isfinite(value) or value <= 0:
+            raise DesignError(f"--{name.replace('_', '-')} must be a positive number, found {value:g}")
+    for name in ("min_rest_s", "first_rest_s", "handling_s"):
+        value = getattr(limits, name)
+        if not np.isfinite(value) or value < 0:
+            raise DesignError(f"--{name.replace('_', '-')} must be 0 or more, found {value:g}")
+    if not limits.angles or any(a <= 0 or a % 90 or a > 360 for a in limits.angles):
+        raise DesignError("--angles must be multiples of 90 deg up to 360 (positions are letter orientations)")
+    smallest = min(limits.angles)
+    groups = 1 if limits.table_axes == 3 else 2
+    need = groups * (max(limits.first_rest_s, limits.min_rest_s) + limits.min_rest_s + limits.rotation_s(smallest))
+    need += (groups - 1) * limits.handling_s
+    if limits.total_s < need:
+        raise DesignError(f"--total-s {limits.total_s:g} s is too short: a {limits.table_axes}-axis table needs at "
+                          f"least {need:.0f} s for its shortest usable schedule ({groups} group(s) of a first rest "
+                          f"of {max(limits.first_rest_s, limits.min_rest_s):g} s, one turn of {smallest} deg at "
+                          f"{limits.max_rate_deg_s:g} deg/s and a rest of {limits.min_rest_s:g} s, handling "
+                          f"{limits.handling_s:g} s)")
+
+
+def default_rate(base: Problem) -> float:
+    """The input schedule's peak turn rate (deg/s): the table's rate unless told otherwise."""
+    return peak_rate_deg_s(base)
+
+
+def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str = "21", hours: float = 1.0,
+               cap: float = 1.1, evaluations: int = 300, seed: int = 0, verify_runs: int = 0, workers=None,
+               out_dir: str | Path = ".", progress: Callable[[str], None] | None = None) -> DesignRun:
+    """Design a schedule for ``base``'s unit and prepare ``design.toml``, ``design.md`` and ``design.png``
+    (and with ``verify_runs`` a Monte Carlo of the design, its files under ``verify/``)."""
+    say = progress or (lambda text: None)
+    check_limits(limits)
+    t0 = time.perf_counter()
+    crit = Criterion(criterion, base, model, cap, hours)
+    say(f"input schedule {base.name}: predicted; searching under {limits.total_s:g} s")
+    best = design(base, limits, crit, evaluations=evaluations, seed=seed, progress=say)
+    problem = design_problem(base, best.groups, best.statics, limits, f"{base.name}-design")
+    seconds = time.perf_counter() - t0
+    out = Path(out_dir)
+    ref = crit.score_prediction(base, crit.reference)
+    settings = {"input": f"{base.name} ({base.source})", "criterion": criterion, "model": model,
+                "table axes": str(limits.table_axes), "total time": f"{limits.total_s:g} s",
+                "peak rate": f"{limits.max_rate_deg_s:.3g} deg/s ({limits.profile})",
+                "turn angles": ", ".join(f"{a} deg" for a in limits.angles),
+                "shortest rest": f"{limits.min_rest_s:g} s (first of a group {limits.first_rest_s:g} s)",
+                "handling between groups": f"{limits.handling_s:g} s",
+                "no parameter worse than": f"{cap:g} x the input's sigma (penalised beyond)",
+                "search": f"{crit.evaluations} predictions in {seconds:.0f} s (seed {seed})"}
+    extra = []
+    if criterion == "navigation":
+        extra.append(f"- navigation error after {hours:g} h: design {navigation_error(problem, best.score.prediction, hours):.4g}"
+                     f" m, input {crit.ref_navigation:.4g} m")
+    header = (f"Designed by casadi-sins design from {base.source}: criterion {criterion}, {limits.total_s:g} s, "
+              f"{limits.table_axes}-axis table.\nPredicted geometric-mean sigma ratio against {base.name} "
+              f"{best.score.geometric_mean:.3f}, worst {best.score.ratios.max():.3f}.")
+    files = {out / "design.toml": checked_text(problem, base, header).encode(),
+             out / "design.png": drawing([base, problem])}
+    summary = None
+    if verify_runs:
+        summary, mc_files, line = _verify(problem, best, verify_runs, workers, out, say)
+        files.update(mc_files)
+        extra.append(line)
+    files[out / "design.md"] = markdown(base, problem, ref, best.score, settings, extra, "design.png").encode()
+    return DesignRun(best, problem, files, summary, seconds)
+
+
+#: The Monte Carlo's seeds start where ``montecarlo``'s do, so ``--verify N`` and ``montecarlo --runs N`` agree.
+FIRST_SEED = 10000
+SOLVERS = ("nlp", "ils")
+
+
+def _verify(problem: Problem, best: Candidate, runs: int, workers, out: Path, say):
+    """Monte Carlo of the design (:mod:`studies.montecarlo`, both solvers): RMS error against sigma."""
+    say(f"verifying: {runs} simulated recordings of the design, each calibrated ({', '.join(SOLVERS)})")
+    t0 = time.perf_counter()
+    rows = MC.run(problem, range(FIRST_SEED, FIRST_SEED + runs), SOLVERS, workers)
+    elapsed = time.perf_counter() - t0
+    summary = MC.with_prediction(MC.summary(rows), best.score.prediction.sigma_natural)
+    files = MC.montecarlo_files(problem, rows, summary, out / "verify", runs, elapsed)
+    failed = int((rows["failed"] != "").sum()) if "failed" in rows else 0
+    parts = []
+    for solver, part in summary.groupby("solver", sort=False):
+        parts.append(f"{solver}: RMS error / solver's sigma {part['rms_over_sigma'].min():.2f}-"
+                     f"{part['rms_over_sigma'].max():.2f}, / predicted sigma {part['rms_over_predicted'].min():.2f}-"
+                     f"{part['rms_over_predicted'].max():.2f}")
+    line = f"- Monte Carlo of the design ({runs} runs, {failed} failed; verify/): " + "; ".join(parts)
+    return summary, files, line

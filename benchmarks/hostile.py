@@ -31,7 +31,7 @@ import pandas as pd
 from casadi_sins.cli import main
 from casadi_sins.data.description import read_recording
 from casadi_sins.report.cheader import c_header
-from casadi_sins.studies.batch import batch_files
+from casadi_sins.studies.batch import SPREAD_COLUMNS, batch_files
 
 CLASSES = ("huge column", "compression bomb", "device or link output", "formula name", "output onto input",
            "degenerate table")
@@ -161,7 +161,8 @@ def formula_name(folder, toml, csv, rng, outcome):
     rec = read_recording(folder / "r.toml")
     fleet = pd.DataFrame({"unit_id": [rec.name], "recording": [name], "status": ["ok"], "warnings": [0],
                           "message": [name]})
-    spread = pd.DataFrame({"parameter": ["accel_bias_x"], "outliers": [rec.name]})
+    spread = pd.DataFrame([{c: float("nan") for c in SPREAD_COLUMNS}])  # a spread table as batch writes it
+    spread[["parameter", "unit", "outliers"]] = ["accel_bias_x", "ug", rec.name]
     files = batch_files(fleet, spread, folder)
     for path, data in files.items():
         if path.suffix == ".csv":

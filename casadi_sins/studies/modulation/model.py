@@ -11,7 +11,7 @@ misalignments, ``T_a`` lower triangular).  The last three are the gyro scale-fac
 al. 2023, eq. 33): the scale error differs by ``+-dK*`` between positive and negative rates,
 ``d_w_i += dK*_i |w_i|``.
 
-The dynamics are those of :mod:`casadi_sins.studies.budget` with the IMU attitude ``C(t) = C_b^n`` and
+The dynamics are those of :mod:`casadi_sins.nav.errorstate` (as the budget's) with the IMU attitude ``C(t) = C_b^n`` and
 the body rate ``w(t) = C(t)^T w_ie + w_table(t)`` now functions of time (Guan et al. 2023, eqs. 1-8;
 the phi-angle model of Yu and Ruan 2014, eq. 1)::
 
@@ -30,12 +30,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core import earth, rotations, units
+from ...core import earth, units
 from ...core.earth import Site
 from ...core.errors import InputError
 from ...model import registry
+from ...nav import errorstate
 
-NAV_NAMES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dlat", "dlon")
+NAV_NAMES = errorstate.NAV_NAMES
 #: The 21 parameter errors, in the package's order.
 PARAM_NAMES = registry.NAMES
 ASYM_NAMES = ("gyro_asymmetry_x", "gyro_asymmetry_y", "gyro_asymmetry_z")
@@ -43,7 +44,7 @@ STATE_NAMES = NAV_NAMES + PARAM_NAMES + ASYM_NAMES
 N_NAV, N_STATE = len(NAV_NAMES), len(STATE_NAMES)
 INDEX = {name: i for i, name in enumerate(STATE_NAMES)}
 
-PHI, DV, POS = slice(0, 3), slice(3, 5), slice(5, 7)
+PHI, DV, POS = errorstate.PHI, errorstate.DV, errorstate.POS
 SENSOR = slice(N_NAV, N_STATE)  # the constant sensor-error states
 
 
@@ -86,19 +87,8 @@ def to_metres(site: Site) -> np.ndarray:
 
 
 def navigation_block(site: Site) -> np.ndarray:
-    """The constant part of ``F``: the navigation errors among themselves (the budget's model)."""
-    sl, cl = np.sin(site.latitude), np.cos(site.latitude)
-    r_m, r_n = earth.earth_radii(site.latitude)
-    r_m, r_n = r_m + site.height, r_n + site.height
-    f = np.zeros((N_STATE, N_STATE))
-    f[PHI, PHI] = -rotations.skew(site.earth_rate)
-    f[PHI, 5] = earth.EARTH_RATE * np.array([0.0, -sl, cl])  # d(w_ie)/dL
-    f[PHI, DV] = np.array([[0.0, -1.0 / r_m], [1.0 / r_n, 0.0], [sl / cl / r_n, 0.0]])  # d(w_en)/d(v_E, v_N)
-    f[DV, PHI] = rotations.skew(np.array([0.0, 0.0, site.g]))[:2]  # f^n x phi
-    f[DV, DV] = -rotations.skew(2.0 * site.earth_rate)[:2, :2]  # Coriolis
-    f[5, 4] = 1.0 / r_m
-    f[6, 3] = 1.0 / (r_n * cl)
-    return f
+    """The constant part of ``F``: the navigation errors among themselves (:mod:`casadi_sins.nav.errorstate`)."""
+    return errorstate.navigation_block(site.latitude, site.height, site.g, N_STATE)
 
 
 def _columns(span: slice) -> slice:
@@ -134,10 +124,7 @@ def error_matrix(nav: np.ndarray, site: Site, attitude: np.ndarray, table_rate: 
     """
     w_body = attitude.T @ site.earth_rate + table_rate
     f_body = attitude.T @ np.array([0.0, 0.0, site.g])
-    f = nav.copy()
-    f[PHI, SENSOR] = -attitude @ gyro_sensitivity(w_body)
-    f[DV, SENSOR] = (attitude @ accel_sensitivity(f_body))[:2]
-    return f
+    return errorstate.with_sensor_inputs(nav, attitude @ gyro_sensitivity(w_body), attitude @ accel_sensitivity(f_body))
 
 
 def noise_inputs(attitude: np.ndarray, gyro_arw: np.ndarray, accel_vrw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -59,6 +59,13 @@ def navigation_block(latitude: float, height: float, gravity: float, n_state: in
     return f
 
 
+def position_metres(latitude: float, height: float) -> np.ndarray:
+    """Metres per radian of the (latitude, longitude) errors at the site: north and east, ``(R_M + h,
+    (R_N + h) cos L)``."""
+    r_m, r_n = earth_radii(latitude)
+    return np.array([r_m + height, (r_n + height) * np.cos(latitude)])
+
+
 def with_sensor_inputs(nav: np.ndarray, gyro_input: np.ndarray, accel_input: np.ndarray) -> np.ndarray:
     """``F``: ``nav`` (:func:`navigation_block`) plus the sensor-error columns.
 

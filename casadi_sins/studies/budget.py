@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.earth import earth_radii, earth_rate_enu
+from ..core.earth import earth_rate_enu
 from ..core.linalg import expm
 from ..core.orientation import orientation_to_dcm
 from ..core.units import DEG_PER_H, UG
@@ -33,7 +33,7 @@ from ..model.output import rest_sensitivity
 from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_mask
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
-from ..nav.errorstate import N_NAV, navigation_block, with_sensor_inputs
+from ..nav.errorstate import N_NAV, navigation_block, position_metres, with_sensor_inputs
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
 from ..core.files import safe_stem
@@ -135,8 +135,7 @@ def error_budget(calibration_covariance: np.ndarray, nominal: np.ndarray, attitu
 
     steps = int(round(duration_s / step_s))
     time = np.arange(steps + 1) * step_s
-    r_m, r_n = earth_radii(latitude)
-    to_metres = np.array([r_m + height, (r_n + height) * np.cos(latitude)])
+    to_metres = position_metres(latitude, height)
 
     def propagate(p0: np.ndarray, noise: bool) -> np.ndarray:
         out = np.zeros((steps + 1, 2))
@@ -191,8 +190,7 @@ def propagate_mean(errors: np.ndarray, attitude: np.ndarray, latitude: float, he
     z = np.zeros(N_STATE)
     z[0:3] = alignment_sensitivity(np.tile(w_b * dt, (4, 1)), np.tile(f_b * dt, (4, 1)), dt) @ errors
     z[N_NAV:] = errors
-    r_m, r_n = earth_radii(latitude)
-    scale = np.array([r_m + height, (r_n + height) * np.cos(latitude)])
+    scale = position_metres(latitude, height)
     steps = int(round(duration_s / step_s))
     out = np.zeros((steps + 1, 2))
     for k in range(steps + 1):

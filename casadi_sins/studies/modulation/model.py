@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core import earth, units
+from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError
 from ...model import registry
@@ -83,8 +83,7 @@ def check_site(site: Site) -> Site:
 
 def to_metres(site: Site) -> np.ndarray:
     """Metres per radian of (latitude, longitude) error: north and east."""
-    r_m, r_n = earth.earth_radii(site.latitude)
-    return np.array([r_m + site.height, (r_n + site.height) * np.cos(site.latitude)])
+    return errorstate.position_metres(site.latitude, site.height)
 
 
 def navigation_block(site: Site) -> np.ndarray:

@@ -3,18 +3,15 @@
 Attitude is the direction cosine matrix ``C_b^n`` whose columns are the body axes written in the
 navigation frame; quaternions are ``(w, x, y, z)`` with ``q_b^n``.  Functions named ``*_expr``
 build CasADi expressions (the strapdown step, the estimator's graph); the others take NumPy arrays.
-Where both are needed, the NumPy function evaluates the CasADi expression, so that the formula
-exists once.
+Where both are needed, the formula exists once: both forms take one element-wise formula (the
+quaternion's rotation matrix), or they differ on purpose (the CasADi rotation-vector quaternion is a
+series whose derivative exists at zero; the NumPy one is exact for any angle).
 """
 
 from __future__ import annotations
 
-import functools
-
 import casadi as ca
 import numpy as np
-
-from .compiled import Mapped
 
 
 def skew(v) -> np.ndarray:
@@ -100,29 +97,45 @@ def quat_from_rotvec_expr(phi):
     return ca.vertcat(c, s * phi)
 
 
+def _dcm_rows(w, x, y, z) -> list[list]:
+    """The nine entries of the direction cosine matrix of a unit quaternion, row by row (element-wise
+    operations only, so that NumPy arrays and CasADi symbols take the same formula)."""
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+
+
 def quat_to_dcm_expr(q):
     """Direction cosine matrix of a unit quaternion (w, x, y, z)."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    return ca.vertcat(
-        ca.horzcat(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-        ca.horzcat(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-        ca.horzcat(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-    )
-
-
-@functools.lru_cache(maxsize=None)
-def _quat_to_dcm_mapped() -> Mapped:
-    q = ca.SX.sym("q", 4)
-    return Mapped(ca.Function("quat_to_dcm", [q], [ca.vec(quat_to_dcm_expr(q))]))
+    return ca.vertcat(*[ca.horzcat(*row) for row in _dcm_rows(q[0], q[1], q[2], q[3])])
 
 
 def quat_to_dcm(q) -> np.ndarray:
-    """:func:`quat_to_dcm_expr` evaluated for one quaternion (4,) -> (3, 3) or many (N, 4) -> (N, 3, 3)."""
+    """The formula of :func:`quat_to_dcm_expr` in NumPy, for one quaternion (4,) -> (3, 3) or many
+    (..., 4) -> (..., 3, 3)."""
     q = np.asarray(q, dtype=float)
-    single = q.ndim == 1
-    flat = _quat_to_dcm_mapped()(np.atleast_2d(q))
-    out = flat.reshape(len(flat), 3, 3).transpose(0, 2, 1)  # vec() is column-major
-    return out[0] if single else out
+    rows = _dcm_rows(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
+    return np.stack([np.stack(row, -1) for row in rows], -2)
+
+
+def quat_multiply(a, b) -> np.ndarray:
+    """Hamilton product ``a * b`` of quaternions (w, x, y, z) in NumPy, batched over leading axes
+    (:func:`quat_multiply_expr` in CasADi)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    aw, av = a[..., :1], a[..., 1:]
+    bw, bv = b[..., :1], b[..., 1:]
+    return np.concatenate([aw * bw - np.sum(av * bv, -1, keepdims=True),
+                           aw * bv + bw * av + np.cross(av, bv)], axis=-1)
+
+
+def quat_from_rotvec(v) -> np.ndarray:
+    """Quaternions (w, x, y, z) of rotation vectors of any size in NumPy, batched over leading axes
+    (exact; :func:`quat_from_rotvec_expr` is the small-angle series for CasADi)."""
+    v = np.asarray(v, dtype=float)
+    angle = np.linalg.norm(v, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    sinc = np.where(angle > 1e-12, np.sin(half) / np.where(angle > 1e-12, angle, 1.0), 0.5 - angle**2 / 48.0)
+    return np.concatenate([np.cos(half), v * sinc], axis=-1)
 
 
 # --------------------------------------------------------------------------- two-vector attitude

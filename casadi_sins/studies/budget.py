@@ -24,23 +24,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.earth import EARTH_RATE, earth_radii, earth_rate_enu
+from ..core.earth import earth_rate_enu
 from ..core.linalg import expm
 from ..core.orientation import orientation_to_dcm
-from ..core.rotations import skew
 from ..core.units import DEG_PER_H, UG
 from ..model.noise import SensorNoise
 from ..model.output import rest_sensitivity
 from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_mask
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
+from ..nav.errorstate import N_NAV, navigation_block, position_metres, with_sensor_inputs
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
 from ..core.files import safe_stem
 from ..report.tables import write_frame
 
-# error state: phi (3), dv_E, dv_N, dL, dlon, then the parameter errors (the 21, then any extra groups)
-N_NAV = 7
+# error state: phi (3), dv_E, dv_N, dL, dlon (nav.errorstate), then the parameter errors (the 21, then any extra groups)
 N_STATE = N_NAV + N_PARAMS
 
 
@@ -54,29 +53,13 @@ def parameter_inputs(attitude: np.ndarray, w_body: np.ndarray, f_body: np.ndarra
 
 
 def error_dynamics(attitude: np.ndarray, latitude: float, height: float, gravity: float, names=NAMES) -> np.ndarray:
-    """Continuous-time matrix ``F`` of the augmented error state on a static base (parameters ``names``)."""
-    omega = EARTH_RATE
-    sl, cl = np.sin(latitude), np.cos(latitude)
-    r_m, r_n = earth_radii(latitude)
-    r_m, r_n = r_m + height, r_n + height
-    w_ie = omega * np.array([0.0, cl, sl])
-    f_n = np.array([0.0, 0.0, gravity])
-    w_body, f_body = attitude.T @ w_ie, attitude.T @ f_n
+    """Continuous-time matrix ``F`` of the augmented error state on a static base (parameters ``names``):
+    :func:`nav.errorstate.navigation_block` with the parameters' inputs."""
+    w_body = attitude.T @ earth_rate_enu(latitude)
+    f_body = attitude.T @ np.array([0.0, 0.0, gravity])
     gyro_input, accel_input = parameter_inputs(attitude, w_body, f_body, names)  # d(C d_omega)/dx, (3, parameters)
-    n_state = N_NAV + len(names)
-    f = np.zeros((n_state, n_state))
-    phi, dv, par = slice(0, 3), slice(3, 5), slice(N_NAV, n_state)
-    f[phi, phi] = -skew(w_ie)
-    f[phi, 5] = omega * np.array([0.0, -sl, cl])  # d(w_ie)/dL
-    f[phi, dv] = np.array([[0.0, -1.0 / r_m], [1.0 / r_n, 0.0], [sl / cl / r_n, 0.0]])  # d(w_en)/d(v_E, v_N)
-    f[phi, par] = -gyro_input
-    f[dv, phi] = skew(f_n)[:2]  # f^n x phi
-    coriolis = skew(2 * w_ie)
-    f[dv, dv] = -coriolis[:2, :2]
-    f[dv, par] = accel_input[:2]
-    f[5, 4] = 1.0 / r_m
-    f[6, 3] = 1.0 / (r_n * cl)
-    return f
+    nav = navigation_block(latitude, height, gravity, N_NAV + len(names))
+    return with_sensor_inputs(nav, gyro_input, accel_input)
 
 
 def noise_input(attitude: np.ndarray, n_params: int = N_PARAMS) -> np.ndarray:
@@ -152,8 +135,7 @@ def error_budget(calibration_covariance: np.ndarray, nominal: np.ndarray, attitu
 
     steps = int(round(duration_s / step_s))
     time = np.arange(steps + 1) * step_s
-    r_m, r_n = earth_radii(latitude)
-    to_metres = np.array([r_m + height, (r_n + height) * np.cos(latitude)])
+    to_metres = position_metres(latitude, height)
 
     def propagate(p0: np.ndarray, noise: bool) -> np.ndarray:
         out = np.zeros((steps + 1, 2))
@@ -208,8 +190,7 @@ def propagate_mean(errors: np.ndarray, attitude: np.ndarray, latitude: float, he
     z = np.zeros(N_STATE)
     z[0:3] = alignment_sensitivity(np.tile(w_b * dt, (4, 1)), np.tile(f_b * dt, (4, 1)), dt) @ errors
     z[N_NAV:] = errors
-    r_m, r_n = earth_radii(latitude)
-    scale = np.array([r_m + height, (r_n + height) * np.cos(latitude)])
+    scale = position_metres(latitude, height)
     steps = int(round(duration_s / step_s))
     out = np.zeros((steps + 1, 2))
     for k in range(steps + 1):

@@ -11,7 +11,7 @@ misalignments, ``T_a`` lower triangular).  The last three are the gyro scale-fac
 al. 2023, eq. 33): the scale error differs by ``+-dK*`` between positive and negative rates,
 ``d_w_i += dK*_i |w_i|``.
 
-The dynamics are those of :mod:`casadi_sins.studies.budget` with the IMU attitude ``C(t) = C_b^n`` and
+The dynamics are those of :mod:`casadi_sins.nav.errorstate` (as the budget's) with the IMU attitude ``C(t) = C_b^n`` and
 the body rate ``w(t) = C(t)^T w_ie + w_table(t)`` now functions of time (Guan et al. 2023, eqs. 1-8;
 the phi-angle model of Yu and Ruan 2014, eq. 1)::
 
@@ -30,12 +30,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core import earth, rotations, units
+from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError
 from ...model import registry
+from ...nav import errorstate
+from ...nav.errormodel import input_sensitivity
 
-NAV_NAMES = ("phi_E", "phi_N", "phi_U", "dv_E", "dv_N", "dlat", "dlon")
+NAV_NAMES = errorstate.NAV_NAMES
 #: The 21 parameter errors, in the package's order.
 PARAM_NAMES = registry.NAMES
 ASYM_NAMES = ("gyro_asymmetry_x", "gyro_asymmetry_y", "gyro_asymmetry_z")
@@ -43,7 +45,7 @@ STATE_NAMES = NAV_NAMES + PARAM_NAMES + ASYM_NAMES
 N_NAV, N_STATE = len(NAV_NAMES), len(STATE_NAMES)
 INDEX = {name: i for i, name in enumerate(STATE_NAMES)}
 
-PHI, DV, POS = slice(0, 3), slice(3, 5), slice(5, 7)
+PHI, DV, POS = errorstate.PHI, errorstate.DV, errorstate.POS
 SENSOR = slice(N_NAV, N_STATE)  # the constant sensor-error states
 
 
@@ -81,50 +83,24 @@ def check_site(site: Site) -> Site:
 
 def to_metres(site: Site) -> np.ndarray:
     """Metres per radian of (latitude, longitude) error: north and east."""
-    r_m, r_n = earth.earth_radii(site.latitude)
-    return np.array([r_m + site.height, (r_n + site.height) * np.cos(site.latitude)])
+    return errorstate.position_metres(site.latitude, site.height)
 
 
 def navigation_block(site: Site) -> np.ndarray:
-    """The constant part of ``F``: the navigation errors among themselves (the budget's model)."""
-    sl, cl = np.sin(site.latitude), np.cos(site.latitude)
-    r_m, r_n = earth.earth_radii(site.latitude)
-    r_m, r_n = r_m + site.height, r_n + site.height
-    f = np.zeros((N_STATE, N_STATE))
-    f[PHI, PHI] = -rotations.skew(site.earth_rate)
-    f[PHI, 5] = earth.EARTH_RATE * np.array([0.0, -sl, cl])  # d(w_ie)/dL
-    f[PHI, DV] = np.array([[0.0, -1.0 / r_m], [1.0 / r_n, 0.0], [sl / cl / r_n, 0.0]])  # d(w_en)/d(v_E, v_N)
-    f[DV, PHI] = rotations.skew(np.array([0.0, 0.0, site.g]))[:2]  # f^n x phi
-    f[DV, DV] = -rotations.skew(2.0 * site.earth_rate)[:2, :2]  # Coriolis
-    f[5, 4] = 1.0 / r_m
-    f[6, 3] = 1.0 / (r_n * cl)
-    return f
-
-
-def _columns(span: slice) -> slice:
-    """A state slice as columns of the (3, 24) sensor sensitivities."""
-    return slice(span.start - N_NAV, span.stop - N_NAV)
+    """The constant part of ``F``: the navigation errors among themselves (:mod:`casadi_sins.nav.errorstate`)."""
+    return errorstate.navigation_block(site.latitude, site.height, site.g, N_STATE)
 
 
 def gyro_sensitivity(w_body: np.ndarray) -> np.ndarray:
-    """``d(d_w)/d(sensor states)`` (3, 24) at body rate ``w_body``: bias, scale, misalignment, asymmetry."""
-    j = np.zeros((3, N_STATE - N_NAV))
-    j[:, _columns(GYRO_BIAS)] = np.eye(3)
-    j[:, _columns(GYRO_SCALE)] = np.diag(w_body)
-    for m, (i, k) in enumerate(GYRO_MISALIGN_ENTRIES):
-        j[i, GYRO_MISALIGN.start - N_NAV + m] = w_body[k]
-    j[:, _columns(GYRO_ASYM)] = np.diag(np.abs(w_body))
-    return j
+    """``d(d_w)/d(sensor states)`` (3, 24) at body rate ``w_body``: the 21's
+    (:func:`casadi_sins.nav.errormodel.input_sensitivity`, eqs. 5-12), then the asymmetry's ``diag(|w|)``."""
+    return np.hstack([input_sensitivity(w_body[None], 1.0, "gyro")[0], np.diag(np.abs(w_body))])
 
 
 def accel_sensitivity(f_body: np.ndarray) -> np.ndarray:
-    """``d(d_f)/d(sensor states)`` (3, 24) at specific force ``f_body``: bias, scale, misalignment."""
-    j = np.zeros((3, N_STATE - N_NAV))
-    j[:, _columns(ACCEL_BIAS)] = np.eye(3)
-    j[:, _columns(ACCEL_SCALE)] = np.diag(f_body)
-    for m, (i, k) in enumerate(ACCEL_MISALIGN_ENTRIES):
-        j[i, ACCEL_MISALIGN.start - N_NAV + m] = f_body[k]
-    return j
+    """``d(d_f)/d(sensor states)`` (3, 24) at specific force ``f_body``: the 21's
+    (:func:`casadi_sins.nav.errormodel.input_sensitivity`), none of the asymmetry."""
+    return np.hstack([input_sensitivity(f_body[None], 1.0, "accel")[0], np.zeros((3, len(ASYM_NAMES)))])
 
 
 def error_matrix(nav: np.ndarray, site: Site, attitude: np.ndarray, table_rate: np.ndarray) -> np.ndarray:
@@ -134,10 +110,7 @@ def error_matrix(nav: np.ndarray, site: Site, attitude: np.ndarray, table_rate: 
     """
     w_body = attitude.T @ site.earth_rate + table_rate
     f_body = attitude.T @ np.array([0.0, 0.0, site.g])
-    f = nav.copy()
-    f[PHI, SENSOR] = -attitude @ gyro_sensitivity(w_body)
-    f[DV, SENSOR] = (attitude @ accel_sensitivity(f_body))[:2]
-    return f
+    return errorstate.with_sensor_inputs(nav, attitude @ gyro_sensitivity(w_body), attitude @ accel_sensitivity(f_body))
 
 
 def noise_inputs(attitude: np.ndarray, gyro_arw: np.ndarray, accel_vrw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -158,8 +131,11 @@ def alignment_map(site: Site, attitude: np.ndarray) -> np.ndarray:
         phi_E = -df_N / g,    phi_N = df_E / g,    phi_U = tan(L) df_E / g - dw_E / w_ie,N
 
     with ``df^n = C d_f``, ``dw^n = C d_w`` of the errors at rest: the coarse alignment of Kang et al.
-    2013 (eq. 14) linearised (eq. 15), which :func:`casadi_sins.nav.errormodel.alignment_sensitivity`
-    computes for the 21 through CasADi.
+    2013 (eq. 14) linearised (eq. 15) in closed form, which the tests hold against the package's
+    :func:`casadi_sins.nav.errormodel.alignment_sensitivity`.  Through CasADi
+    (:func:`casadi_sins.nav.alignment.alignment_error`) it agrees to 1e-15 relative, but an aligned run's
+    ratios to strapdown divide by strapdown contributions that the alignment cancels to rounding, and
+    those ratios would change.
     """
     w_body = attitude.T @ site.earth_rate
     f_body = attitude.T @ np.array([0.0, 0.0, site.g])

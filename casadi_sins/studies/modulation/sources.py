@@ -38,23 +38,33 @@ from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError, shown
 from ...core.toml import read_toml
+from ...model import registry
 from . import model as M
 from . import shipped
 
 #: The ``format`` key of an error sheet.
 FORMAT = "casadi-sins-errors/1"
 
-#: The independent sources and their states.
+def _registry_groups(sensor: str) -> dict[str, list[int]]:
+    """The paper's groups of one sensor with their labels and states, from the registry
+    (:data:`casadi_sins.model.registry.GROUPS`), in its order."""
+    out = {}
+    for key in registry.CORE_GROUPS:
+        group = registry.GROUPS[key]
+        if group.sensor == sensor:
+            first = M.N_NAV + registry.NAMES.index(group.names[0])
+            out[group.label] = list(range(first, first + len(group.names)))
+    return out
+
+
+#: The independent sources and their states: the initial attitude, the gyro's groups, its scale asymmetry
+#: (the registry's ``gyro_asym``, a state of its own here), the accelerometer's groups.
 GROUPS = {
     "initial level": [0, 1],
     "initial heading": [2],
-    "gyro bias": list(range(M.GYRO_BIAS.start, M.GYRO_BIAS.stop)),
-    "gyro scale": list(range(M.GYRO_SCALE.start, M.GYRO_SCALE.stop)),
-    "gyro misalignment": list(range(M.GYRO_MISALIGN.start, M.GYRO_MISALIGN.stop)),
+    **_registry_groups("gyro"),
     "gyro scale asymmetry": list(range(M.GYRO_ASYM.start, M.GYRO_ASYM.stop)),
-    "accel bias": list(range(M.ACCEL_BIAS.start, M.ACCEL_BIAS.stop)),
-    "accel scale": list(range(M.ACCEL_SCALE.start, M.ACCEL_SCALE.stop)),
-    "accel misalignment": list(range(M.ACCEL_MISALIGN.start, M.ACCEL_MISALIGN.stop)),
+    **_registry_groups("accel"),
 }
 NOISES = ("gyro noise", "accel noise")
 SOURCES = tuple(GROUPS) + NOISES

@@ -27,39 +27,13 @@ import numpy as np
 from ...core import earth
 from ...core.earth import Site
 from ...core.errors import InputError
-from ...core.rotations import dcm_to_quat
+from ...core.rotations import dcm_to_quat, quat_from_rotvec, quat_multiply, quat_to_dcm
 from . import model as M
 from .covariance import check_run, check_turn_step, output_pieces
 from .schemes import Piece, Scheme, scheme_pieces
 from .sources import GROUPS, NOISES, Sources
 
 _GX, _GW = np.polynomial.legendre.leggauss(6)
-
-
-def quat_mult(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of quaternions (w, x, y, z), batched over the first axis."""
-    aw, av = a[..., :1], a[..., 1:]
-    bw, bv = b[..., :1], b[..., 1:]
-    return np.concatenate([aw * bw - np.sum(av * bv, -1, keepdims=True),
-                           aw * bv + bw * av + np.cross(av, bv)], axis=-1)
-
-
-def quat_from_rotvec(v: np.ndarray) -> np.ndarray:
-    """Quaternions (w, x, y, z) of rotation vectors, batched over the first axis."""
-    angle = np.linalg.norm(v, axis=-1, keepdims=True)
-    half = 0.5 * angle
-    sinc = np.where(angle > 1e-12, np.sin(half) / np.where(angle > 1e-12, angle, 1.0), 0.5 - angle**2 / 48.0)
-    return np.concatenate([np.cos(half), v * sinc], axis=-1)
-
-
-def quat_to_dcm(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices of quaternions (w, x, y, z), batched: (N, 4) -> (N, 3, 3) in NumPy (the package's
-    :func:`casadi_sins.core.rotations.quat_to_dcm` evaluates the CasADi form, too slow per step here)."""
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
 
 
 def true_increments(piece: Piece, site: Site, tau0: float, h: float):
@@ -160,7 +134,7 @@ def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.r
     r_m, r_n = earth.earth_radii(site.latitude)
     lat0, h0 = site.latitude, site.height
     c0 = pieces[0].attitude
-    q = np.array([quat_mult(quat_from_rotvec(-phi), dcm_to_quat(c0)) for phi in errors.x0[:, M.PHI]])
+    q = np.array([quat_multiply(quat_from_rotvec(-phi), dcm_to_quat(c0)) for phi in errors.x0[:, M.PHI]])
     v = np.zeros((n, 3))
     lat, lon = np.full(n, lat0), np.zeros(n)
     out_t, out = [0.0], [np.zeros((n, 4))]
@@ -203,7 +177,7 @@ def _step(q, v, lat, lon, th, dv, prev_th, prev_dv, h, site: Site):
     v_mid = 0.5 * (v + v_next)
     lat_next = lat + v_mid[:, 1] / r_m * h
     lon_next = lon + v_mid[:, 0] / (r_n * cl) * h
-    q_next = quat_mult(quat_mult(quat_from_rotvec(-w_in_h), q), quat_from_rotvec(phi))
+    q_next = quat_multiply(quat_multiply(quat_from_rotvec(-w_in_h), q), quat_from_rotvec(phi))
     q_next /= np.linalg.norm(q_next, axis=1, keepdims=True)
     return q_next, v_next, lat_next, lon_next
 

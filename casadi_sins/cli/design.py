@@ -7,8 +7,6 @@ import argparse
 from ..core.files import write_files
 from ..data.problem import load_problem
 from ..studies.design.criteria import CRITERIA
-from ..studies.design.run import default_rate, run_design
-from ..studies.design.space import DesignError, Limits
 from .commands import CliError
 from .logs import message_printer
 
@@ -57,6 +55,8 @@ def add_design_command(sub) -> None:
 
 def cmd_design(args) -> int:
     """``design``: the search, then the files together."""
+    from ..studies.design.run import default_rate, run_design  # the search loads only when it runs
+    from ..studies.design.space import DesignError, Limits
     base = load_problem(args.problem)
     if args.evaluations < 1 or args.verify < 0 or not args.cap > 0 or not args.hours > 0:
         raise CliError("--evaluations must be at least 1, --verify 0 or more, --cap and --hours positive")

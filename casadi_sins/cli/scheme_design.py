@@ -7,8 +7,6 @@ from __future__ import annotations
 from ..core.files import write_files
 from ..core.units import DEG
 from ..studies.modulation.design import CRITERIA, Request
-from ..studies.modulation.design_report import design_files
-from ..studies.modulation.designer import design
 from .commands import CliError
 from .logs import message_printer
 from .modulation import _finite, site_and_sources
@@ -17,6 +15,8 @@ from .modulation import _finite, site_and_sources
 def cmd_design_scheme(args) -> int:
     """``design-scheme``: search rotation sequences for the smallest navigation error; scheme.toml and
     design.json/.md."""
+    from ..studies.modulation.design_report import design_files  # the search loads only when it runs
+    from ..studies.modulation.designer import design
     _finite(args, "rate_deg_s", "stop_s")
     if args.samples < 1:
         raise CliError(f"--samples must be at least 1 (got {args.samples})")

@@ -11,17 +11,10 @@ from ..core.files import atomic_write_text, write_files
 from ..core.inputs import first_line
 from ..data.conditions import TEMPERATURE_RANGE_C
 from ..data.tables import read_table
-from ..data.thermal import companion_path, read_thermal
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
-from ..report.cheader_thermal import c_header_thermal
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Applied, apply_table
-from ..studies.thermal.apply import apply_thermal
-from ..studies.thermal.fit import fit_thermal
-from ..studies.thermal.inputs import load_points
-from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
-from ..studies.thermal.simulate import simulate_thermal, thermal_simulation_files
 from .commands import CliError, cmd_export, cmd_simulate
 
 
@@ -46,6 +39,9 @@ def add_thermal_command(sub) -> None:
 
 def cmd_thermal(args: argparse.Namespace) -> int:
     """``thermal``: fit, write every file together, print the coefficients and the warnings."""
+    from ..studies.thermal.fit import fit_thermal  # the thermal modules load only for thermal work
+    from ..studies.thermal.inputs import load_points
+    from ..studies.thermal.outputs import at_name, natural_coefficients, thermal_files
     low, high = TEMPERATURE_RANGE_C
     for t in [args.reference_c, *args.at]:
         if not low <= t <= high:
@@ -101,6 +97,8 @@ def apply_inputs(args) -> tuple[str, str]:
 def applied_recording(args, table: str, rec) -> Applied:
     """The recording compensated with the table, or with the thermal model at ``--temperature-c``, else at the
     recording's ``[conditions] temperature_c``, else sample by sample at its temperature column."""
+    from ..data.thermal import read_thermal
+    from ..studies.thermal.apply import apply_thermal
     if not args.thermal:
         return apply_table(rec, read_table(table))
     model = read_thermal(table)
@@ -118,6 +116,8 @@ def applied_recording(args, table: str, rec) -> Applied:
 
 def cmd_export_any(args) -> int:
     """``export``: a parameter table (:func:`commands.cmd_export`), or a thermal model as a C header."""
+    from ..data.thermal import read_thermal
+    from ..report.cheader_thermal import c_header_thermal
     if not is_thermal_file(args.table):
         return cmd_export(args)
     if args.format != "c":
@@ -143,6 +143,7 @@ def is_thermal_file(path) -> bool:
 
 
 def _thermal_unit_id(path) -> str | None:
+    from ..data.thermal import companion_path
     try:
         doc = json.loads(companion_path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -153,6 +154,7 @@ def _thermal_unit_id(path) -> str | None:
 
 def cmd_simulate_any(args) -> int:
     """``simulate``: a problem (:func:`commands.cmd_simulate`), or a thermal problem: one recording per setpoint."""
+    from ..studies.thermal.simulate import simulate_thermal, thermal_simulation_files
     if not has_thermal(args.problem):
         return cmd_simulate(args)
     if args.start_attitude_deg is not None or args.quantize or args.name:

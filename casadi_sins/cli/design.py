@@ -33,6 +33,10 @@ def add_design_command(sub) -> None:
                    "input's variances; worst: the largest sigma ratio to the input; navigation: static "
                    "navigation error after --hours (default d)")
     p.add_argument("--hours", type=float, default=1.0, help="navigation time of --criterion navigation, h (default 1)")
+    p.add_argument("--scheme", metavar="NAME|FILE",
+                   help="with --criterion navigation: the rotation scheme the unit runs in operation (a shipped "
+                   "name such as dual-axis-16 or yu-ruan2014-improved, or a scheme file); the criterion is then "
+                   "the largest position error of the modulated INS over --hours, as modulate reports it")
     p.add_argument("--max-rate-deg-s", type=float, help="peak turn rate, deg/s (default: the input schedule's)")
     p.add_argument("--angles", type=_angles, default=(90, 180), help="turn angles allowed, deg (default 90,180)")
     p.add_argument("--min-rest-s", type=float, default=30.0, help="shortest static, s (default 30)")
@@ -58,15 +62,21 @@ def cmd_design(args) -> int:
     from ..studies.design.run import default_rate, run_design  # the search loads only when it runs
     from ..studies.design.space import DesignError, Limits
     base = load_problem(args.problem)
-    if args.evaluations < 1 or args.verify < 0 or not args.cap > 0 or not args.hours > 0:
+    if args.evaluations < 1 or args.verify < 0 or not args.cap > 0 or not 0 < args.hours < float("inf"):
         raise CliError("--evaluations must be at least 1, --verify 0 or more, --cap and --hours positive")
+    if args.scheme and args.criterion != "navigation":
+        raise CliError("--scheme goes with --criterion navigation (the navigation of the modulated INS)")
+    scheme = None
+    if args.scheme:
+        from ..studies.modulation.schemes import load_scheme
+        scheme = load_scheme(args.scheme)
     limits = Limits(total_s=args.total_s, max_rate_deg_s=args.max_rate_deg_s or default_rate(base),
                     min_rest_s=args.min_rest_s, first_rest_s=args.first_rest_s, handling_s=args.handling_s,
                     angles=args.angles, table_axes=args.table_axes, profile=base.timing.rate_profile)
     try:
         result = run_design(base, limits, args.criterion, args.model, args.hours, args.cap, args.evaluations,
                             args.seed, args.verify, args.workers, args.out,
-                            progress=message_printer(args, "design"))
+                            progress=message_printer(args, "design"), scheme=scheme)
     except DesignError as exc:
         raise CliError(str(exc)) from None
     write_files(result.files)

@@ -15,7 +15,8 @@ and -0.22 is "20 % smaller sigma":
     ``log max(sigma_i / sigma_ref,i)``;
 ``navigation``
     the log of the static free-inertial position error after ``hours`` (:mod:`studies.budget`) with the
-    predicted covariance.
+    predicted covariance; with a rotation ``scheme``, the log of the largest position error of the unit
+    navigating under that scheme for ``hours`` (:mod:`.modulated`, the number ``modulate`` reports).
 
 A parameter whose sigma exceeds ``cap`` times the input's adds ``PENALTY`` per unit of log excess:
 a design should be no worse anywhere unless told (``--cap``).
@@ -82,17 +83,33 @@ class Criterion:
         Largest sigma ratio a parameter may have before the penalty applies.
     hours : float
         Navigation time of the ``navigation`` criterion.
+    scheme : Scheme, optional
+        With ``navigation``: the rotation scheme the unit runs in operation (else static strapdown).
     """
 
-    def __init__(self, kind: str, reference: Problem, model: str = "21", cap: float = 1.1, hours: float = 1.0):
+    def __init__(self, kind: str, reference: Problem, model: str = "21", cap: float = 1.1, hours: float = 1.0,
+                 scheme=None):
         if kind not in CRITERIA:
             raise ValueError(f"criterion must be one of {', '.join(CRITERIA)}")
+        if scheme is not None and kind != "navigation":
+            raise ValueError("a rotation scheme goes with the navigation criterion")
         self.kind, self.model, self.cap, self.hours = kind, model, cap, hours
+        self.modulated = None
+        if scheme is not None:
+            from .modulated import ModulatedNavigation  # the modulation model loads only when asked for
+            self.modulated = ModulatedNavigation(reference, scheme, hours)
         self.reference = predict_problem(reference, model)
         self.ref_sigma = self.reference.sigma_natural
         self.ref_logdet = np.linalg.slogdet(natural_covariance(self.reference))[1]
-        self.ref_navigation = navigation_error(reference, self.reference, hours) if kind == "navigation" else 1.0
+        self.ref_navigation = self.navigation(reference, self.reference) if kind == "navigation" else 1.0
         self.evaluations = 0
+
+    def navigation(self, problem: Problem, pred: Prediction) -> float:
+        """The navigation error (m) of the ``navigation`` criterion for a prediction of ``problem``: static
+        free-inertial after ``hours``, or the largest under the rotation scheme."""
+        if self.modulated is None:
+            return navigation_error(problem, pred, self.hours)
+        return self.modulated(pred.nominal.values, np.asarray(pred.nominal.covariance))
 
     def score(self, problem: Problem) -> Score:
         """Predict a schedule and score it."""
@@ -110,7 +127,7 @@ class Criterion:
         elif self.kind == "worst":
             value = np.log(ratios.max())
         else:
-            value = np.log(navigation_error(problem, pred, self.hours) / self.ref_navigation)
+            value = np.log(self.navigation(problem, pred) / self.ref_navigation)
         excess = np.maximum(np.log(ratios) - np.log(self.cap), 0.0).sum()
         value = float(value) if np.isfinite(value) else np.inf
         return Score(pred, ratios, value, value + PENALTY * float(excess))

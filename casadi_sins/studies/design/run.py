@@ -11,7 +11,7 @@ import numpy as np
 
 from ...data.problem import Problem
 from .. import montecarlo as MC
-from .criteria import Criterion, navigation_error
+from .criteria import Criterion
 from .problemfile import checked_text
 from .report import drawing, markdown
 from .search import Candidate, design
@@ -60,13 +60,14 @@ def default_rate(base: Problem) -> float:
 
 def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str = "21", hours: float = 1.0,
                cap: float = 1.1, evaluations: int = 300, seed: int = 0, verify_runs: int = 0, workers=None,
-               out_dir: str | Path = ".", progress: Callable[[str], None] | None = None) -> DesignRun:
+               out_dir: str | Path = ".", progress: Callable[[str], None] | None = None, scheme=None) -> DesignRun:
     """Design a schedule for ``base``'s unit and prepare ``design.toml``, ``design.md`` and ``design.png``
-    (and with ``verify_runs`` a Monte Carlo of the design, its files under ``verify/``)."""
+    (and with ``verify_runs`` a Monte Carlo of the design, its files under ``verify/``); ``scheme`` (a
+    rotation scheme, with ``criterion="navigation"``) scores the navigation of the modulated INS."""
     say = progress or (lambda text: None)
     check_limits(limits)
     t0 = time.perf_counter()
-    crit = Criterion(criterion, base, model, cap, hours)
+    crit = Criterion(criterion, base, model, cap, hours, scheme)
     say(f"input schedule {base.name}: predicted; searching under {limits.total_s:g} s")
     best = design(base, limits, crit, evaluations=evaluations, seed=seed, progress=say)
     problem = design_problem(base, best.groups, best.statics, limits, f"{base.name}-design")
@@ -83,8 +84,11 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
                 "search": f"{crit.evaluations} predictions in {seconds:.0f} s (seed {seed})"}
     extra = []
     if criterion == "navigation":
-        extra.append(f"- navigation error after {hours:g} h: design {navigation_error(problem, best.score.prediction, hours):.4g}"
-                     f" m, input {crit.ref_navigation:.4g} m")
+        what = (f"largest horizontal position error over {hours:g} h under rotation scheme {scheme.name}"
+                if scheme is not None else f"static free-inertial horizontal position error after {hours:g} h")
+        settings["navigation"] = what + " (1 sigma, aligned at the start; calibration covariance + white noise)"
+        extra.append(f"- {what}: design {crit.navigation(problem, best.score.prediction):.4g} m, input "
+                     f"{crit.ref_navigation:.4g} m")
     header = (f"Designed by casadi-sins design from {base.source}: criterion {criterion}, {limits.total_s:g} s, "
               f"{limits.table_axes}-axis table.\nPredicted geometric-mean sigma ratio against {base.name} "
               f"{best.score.geometric_mean:.3f}, worst {best.score.ratios.max():.3f}.")

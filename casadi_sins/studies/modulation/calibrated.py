@@ -171,19 +171,41 @@ def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sourc
         check_psd(cov, where)
         if not np.allclose(np.sqrt(np.diag(cov))[: len(NAMES)], params.sigma[: len(NAMES)], rtol=1e-3, atol=0.0):
             raise InputError(where, f"its diagonal does not match the sigma of {table}")
+    zero = np.zeros(3)
+    left = [n for n in names[len(NAMES):] if n not in NAMES + tuple(ASYMMETRY)]
+    extra = f" (extra groups left out: {', '.join(left)})" if left else ""
+    try:
+        return parameter_sources(names, params.values, cov, zero if sheet is None else sheet.gyro_arw,
+                                 zero if sheet is None else sheet.accel_vrw, sheet, name=table.stem,
+                                 correlated=where is not None,
+                                 origin=str(table) + (f" + {where}" if where is not None else "") + extra)
+    except ValueError as exc:
+        raise InputError(table, str(exc)) from None
+
+
+def parameter_sources(names, values: np.ndarray, covariance: np.ndarray, gyro_arw: np.ndarray,
+                      accel_vrw: np.ndarray, sheet: Sources | None = None, name: str = "calibration",
+                      correlated: bool = True, origin: str = "") -> Sources:
+    """Residual errors of parameters ``names`` with ``values`` and ``covariance`` (SI) as the modulation's
+    error sources: the 21 and the gyro scale asymmetry kept (other extra groups are not in its model),
+    scale factors made relative, the white noise ``gyro_arw`` (rad/sqrt(s)) and ``accel_vrw``
+    (m/s/sqrt(s)), the initial errors of ``sheet`` (none without one).
+
+    Raises
+    ------
+    ValueError
+        If a scale factor is zero (its relative error is undefined).
+    """
+    names = tuple(names)
     kept = NAMES + tuple(n for n in ASYMMETRY if n in names)  # the table's asymmetry is the model's dK*
     idx = [names.index(n) for n in kept]
-    values, cov = params.values[idx], cov[np.ix_(idx, idx)]
+    values, cov = np.asarray(values, float)[idx], np.asarray(covariance, float)[np.ix_(idx, idx)]
     scale = np.where(relative_mask(kept), np.abs(values), 1.0)
     if np.any(scale == 0):
-        raise InputError(table, "a scale factor of zero")
+        raise ValueError("a scale factor of zero")
     p0 = np.zeros((M.N_STATE, M.N_STATE)) if sheet is None else sheet.p0.copy()
     states = list(range(M.N_NAV, M.N_NAV + len(NAMES))) + list(range(M.GYRO_ASYM.start, M.GYRO_ASYM.stop))
     states = states[:len(kept)]
     p0[np.ix_(states, states)] = cov / np.outer(scale, scale)
-    zero = np.zeros(3)
-    left = [n for n in names[len(NAMES):] if n not in kept]
-    extra = f" (extra groups left out: {', '.join(left)})" if left else ""
-    return Sources(table.stem, p0, zero if sheet is None else sheet.gyro_arw,
-                   zero if sheet is None else sheet.accel_vrw, correlated=where is not None,
-                   origin=str(table) + (f" + {where}" if where is not None else "") + extra)
+    return Sources(name, p0, np.asarray(gyro_arw, float), np.asarray(accel_vrw, float), correlated=correlated,
+                   origin=origin)

@@ -84,7 +84,8 @@ def cmd_design(args) -> int:
     for group in result.problem.groups:
         print(f"group {group.start}: {' '.join(r.replace(' ', '/') for r in group.rotations)}; statics "
               f"{', '.join(f'{s:g}' for s in group.statics_s)} s")
-    print(f"turns {result.problem.timing.rotation_s:g} s each; total {result.problem.duration:.0f} s")
+    turns = sorted({(abs(s.angle_deg), s.end - s.start) for s in result.problem.segments() if s.kind == "rotation"})
+    print(f"turns {', '.join(f'{a:g} deg in {t:g} s' for a, t in turns)}; total {result.problem.duration:.0f} s")
     print(f"predicted sigma against {base.name}: geometric mean {score.geometric_mean:.3f}, worst "
           f"{score.ratios.max():.3f}; criterion {args.criterion} {score.value:+.4f}")
     if result.verify is not None:

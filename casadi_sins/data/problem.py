@@ -9,7 +9,8 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
                 (between groups: "turn", one turn with the rate profile, or "minimum-jerk", a hand
                 tumble through random attitudes, about 15 deg/s; see :mod:`sim.motion`)
     [[groups]]  start = "NUE", rotations = ["+Z", "-Y 180", ...] (axis, optional angle),
-                optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration)
+                optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration),
+                rotations_s = [...] (each rotation's duration; default [timing] rotation_s)
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
                 accel_noise_ug, gyro_noise_deg_h, quantize
     [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}; the 21, and any
@@ -44,12 +45,14 @@ HANDLINGS = ("turn", "minimum-jerk")
 @dataclasses.dataclass(frozen=True)
 class GroupPlan:
     """One group: its start orientation, the rotations (an axis, or ``"axis angle"`` such as ``"-Y 180"``),
-    the default angle, and optionally each static segment's duration (one more than the rotations)."""
+    the default angle, and optionally each static segment's duration (one more than the rotations) and
+    each rotation's duration."""
 
     start: str
     rotations: tuple[str, ...]
     angle_deg: float = 90.0
     statics_s: tuple[float, ...] | None = None
+    rotations_s: tuple[float, ...] | None = None
 
     def turns(self) -> list[tuple[str, float]]:
         """``(axis, angle_deg)`` of each rotation."""
@@ -136,10 +139,10 @@ class Problem:
                 (self.timing.static_s,) * len(plan.rotations)
             segs.append(Segment(len(segs) + 1, gi, "static", t, t + durations[0], orientation=plan.start))
             t += durations[0]
-            for (axis, angle), duration in zip(plan.turns(), durations[1:]):
-                segs.append(Segment(len(segs) + 1, gi, "rotation", t, t + self.timing.rotation_s,
-                                    axis=axis, angle_deg=angle))
-                t += self.timing.rotation_s
+            turn_s = plan.rotations_s or (self.timing.rotation_s,) * len(plan.rotations)
+            for (axis, angle), duration, rotation_s in zip(plan.turns(), durations[1:], turn_s):
+                segs.append(Segment(len(segs) + 1, gi, "rotation", t, t + rotation_s, axis=axis, angle_deg=angle))
+                t += rotation_s
                 dcm = orient.rotate_body(dcm, axis, math.radians(angle))
                 letters = orient.dcm_to_orientation(dcm, tol_deg=1e-6)
                 segs.append(Segment(len(segs) + 1, gi, "static", t, t + duration, orientation=letters))
@@ -229,14 +232,21 @@ class _Reader:
                 raise self.fail(f"[[groups]] {gi}: {exc}") from None
             raise self.fail(f"[[groups]] {gi}: missing or invalid {shown(str(exc))} (rotations are \"+Z\" or "
                             "\"-Y 180\")") from None
-        statics = item.get("statics_s")
-        if statics is not None:
-            if not isinstance(statics, list) or len(statics) != len(rotations) + 1:
-                raise self.fail(f"[[groups]] {gi}: statics_s must list {len(rotations) + 1} durations")
-            statics = tuple(self.number({"v": v}, "v", f"groups {gi} statics_s") for v in statics)
-            if min(statics) <= 0:
-                raise self.fail(f"[[groups]] {gi}: statics_s must be positive")
-        return GroupPlan(start, rotations, self.number(item, "angle_deg", f"groups {gi}", 90.0), statics)
+        statics = self.durations(gi, item, "statics_s", len(rotations) + 1)
+        turn_s = self.durations(gi, item, "rotations_s", len(rotations))
+        return GroupPlan(start, rotations, self.number(item, "angle_deg", f"groups {gi}", 90.0), statics, turn_s)
+
+    def durations(self, gi: int, item, key: str, count: int) -> tuple[float, ...] | None:
+        """A group's optional list of ``count`` positive durations (``statics_s``, ``rotations_s``)."""
+        values = item.get(key)
+        if values is None:
+            return None
+        if not isinstance(values, list) or len(values) != count:
+            raise self.fail(f"[[groups]] {gi}: {key} must list {count} durations")
+        values = tuple(self.number({"v": v}, "v", f"groups {gi} {key}") for v in values)
+        if values and min(values) <= 0:
+            raise self.fail(f"[[groups]] {gi}: {key} must be positive")
+        return values or None
 
     def deviation(self, key: str, value):
         if key == "quantize":

@@ -48,7 +48,7 @@ def test_random_designs_keep_the_budget_and_the_table(axes):
             assert np.all(times >= low - 1e-9)
         assert sum(t.sum() for t in statics) == pytest.approx(static_budget(groups, limits))
         for g, times in zip(groups, statics):
-            plan = group_plan(g, times)
+            plan = group_plan(g, times, limits)
             mount = parse_axis("+" + g.mount)
             dcms = _attitudes(plan)
             for (axis, _), before, after in zip(plan.turns(), dcms[:-1], dcms[1:]):
@@ -89,6 +89,11 @@ def test_the_problem_file_reads_back_with_the_input_unit(small_problem, kang_pro
     np.testing.assert_array_equal(back.truth.values, kang_problem.truth.values)
     assert 500.0 - 0.3 <= back.duration <= 500.0
     assert [g.rotations for g in back.groups] == [("+X 180", "-Y 90")]
+    # each turn takes its own angle's time at the rate limit (half-sine: peak = pi/2 x mean rate)
+    turns = [s.end - s.start for s in back.segments() if s.kind == "rotation"]
+    assert turns == pytest.approx([limits.rotation_s(180), limits.rotation_s(90)])
+    assert turns[0] == pytest.approx(2 * turns[1], abs=2e-3) and turns[1] == pytest.approx(math.pi / 2 * 90 / 14.0, abs=1e-3)
+    assert peak_rate_deg_s(back) == pytest.approx(14.0, rel=1e-3)
 
 
 def test_criteria_of_the_input_against_itself_are_zero(small_problem):

@@ -45,7 +45,10 @@ def schedule_toml(problem: Problem) -> str:
     for plan in problem.groups:
         lines += ["[[groups]]", f"start = {json.dumps(plan.start)}",
                   "rotations = [" + ", ".join(json.dumps(r) for r in plan.rotations) + "]",
-                  "statics_s = [" + ", ".join(_number(s) for s in plan.statics_s) + "]", ""]
+                  "statics_s = [" + ", ".join(_number(s) for s in plan.statics_s) + "]"]
+        if plan.rotations_s:
+            lines.append("rotations_s = [" + ", ".join(_number(s) for s in plan.rotations_s) + "]")
+        lines.append("")
     return "\n".join(lines)
 
 

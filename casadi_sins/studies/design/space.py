@@ -15,9 +15,9 @@ turn can be about:
     the inner axis only: other orientations need a new mounting, a new group.
 
 Between groups the unit is handled (remounted or moved by the table) in a stated time that counts
-against the budget.  Turns are about one axis with the input schedule's rate profile; every turn of a
-design takes the same time (the problem format's ``rotation_s``), the one its largest angle needs at
-the rate limit.  Positions are always letter orientations: the recording format names them so.
+against the budget.  Turns are about one axis with the input schedule's rate profile; each turn takes
+the time its angle needs at the rate limit (the problem format's ``rotations_s``).  Positions are
+always letter orientations: the recording format names them so.
 """
 
 from __future__ import annotations
@@ -122,15 +122,16 @@ def mount_allowed(start: str, mount: str, table_axes: int) -> bool:
     return abs(float(direction @ DIRECTIONS[OUTER])) < 0.5
 
 
-def group_plan(group: GroupDesign, statics_s) -> GroupPlan:
-    """A designed group in the problem format (body axes, angles, each static's duration)."""
+def group_plan(group: GroupDesign, statics_s, limits: Limits) -> GroupPlan:
+    """A designed group in the problem format (body axes, angles, each static's and each turn's duration)."""
     dcm = orientation_to_dcm(group.start)
     rotations = []
     for turn in group.turns:
         axis = body_axis(turn, group.mount, dcm)
         rotations.append(f"{axis} {turn.angle}")
         dcm = np.round(rotate_body(dcm, axis, math.radians(turn.angle)))
-    return GroupPlan(group.start, tuple(rotations), 90.0, tuple(float(t) for t in statics_s))
+    return GroupPlan(group.start, tuple(rotations), 90.0, tuple(float(t) for t in statics_s),
+                     turn_times(group, limits) or None)
 
 
 def vertical_axes(groups: tuple[GroupDesign, ...]) -> set[int]:
@@ -151,16 +152,15 @@ def usable(groups: tuple[GroupDesign, ...]) -> bool:
     return len(vertical_axes(groups)) == 3
 
 
-def turn_time(groups: tuple[GroupDesign, ...], limits: Limits) -> float:
-    """The time every turn of a design takes (s): the largest angle's at the rate limit."""
-    angles = [t.angle for g in groups for t in g.turns]
-    return limits.rotation_s(max(angles)) if angles else limits.rotation_s(90)
+def turn_times(group: GroupDesign, limits: Limits) -> tuple[float, ...]:
+    """The time each turn of a group takes (s): its angle's at the rate limit."""
+    return tuple(limits.rotation_s(t.angle) for t in group.turns)
 
 
 def static_budget(groups: tuple[GroupDesign, ...], limits: Limits) -> float:
     """Time left for the statics (s): the total less the turns and the handling."""
-    turns = sum(len(g.turns) for g in groups)
-    return limits.total_s - turns * turn_time(groups, limits) - (len(groups) - 1) * limits.handling_s
+    turning = sum(sum(turn_times(g, limits)) for g in groups)
+    return limits.total_s - turning - (len(groups) - 1) * limits.handling_s
 
 
 def minimum_rests(groups: tuple[GroupDesign, ...], limits: Limits) -> list[np.ndarray]:
@@ -204,8 +204,10 @@ def design_problem(base: Problem, groups: tuple[GroupDesign, ...], statics: list
                    name: str | None = None) -> Problem:
     """The design as a problem: ``base``'s unit, noise, site and truth with the designed schedule (statics
     rounded down to 0.1 s, so the whole stays within the budget)."""
-    plans = tuple(group_plan(g, np.floor(np.asarray(t) * 10.0 + 1e-6) / 10.0) for g, t in zip(groups, statics))
-    timing = dataclasses.replace(base.timing, rotation_s=turn_time(groups, limits),
+    plans = tuple(group_plan(g, np.floor(np.asarray(t) * 10.0 + 1e-6) / 10.0, limits)
+                  for g, t in zip(groups, statics))
+    longest = max((s for g in groups for s in turn_times(g, limits)), default=limits.rotation_s(90))
+    timing = dataclasses.replace(base.timing, rotation_s=longest,
                                  gap_s=float(limits.handling_s) if len(groups) > 1 else 0.0, first_static_s=None,
                                  static_s=float(np.mean(np.concatenate(statics))))
     return dataclasses.replace(base, name=name or f"{base.name}-design", groups=plans, timing=timing, source=None,
@@ -213,6 +215,6 @@ def design_problem(base: Problem, groups: tuple[GroupDesign, ...], statics: list
 
 
 def peak_rate_deg_s(problem: Problem) -> float:
-    """The peak turn rate of a problem's schedule (deg/s): its largest angle in its ``rotation_s``."""
-    angles = [abs(a) for g in problem.groups for _, a in g.turns()] or [90.0]
-    return PEAK_PER_MEAN[problem.timing.rate_profile] * max(angles) / problem.timing.rotation_s
+    """The peak turn rate of a problem's schedule (deg/s): the fastest of its turns (angle over duration)."""
+    mean = [abs(s.angle_deg) / (s.end - s.start) for s in problem.segments() if s.kind == "rotation"]
+    return PEAK_PER_MEAN[problem.timing.rate_profile] * (max(mean) if mean else 90.0 / problem.timing.rotation_s)

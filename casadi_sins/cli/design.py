@@ -93,5 +93,7 @@ def cmd_design(args) -> int:
             print(f"Monte Carlo {solver}: RMS error / sigma {s['rms_over_sigma'].min():.2f}-"
                   f"{s['rms_over_sigma'].max():.2f}, / predicted {s['rms_over_predicted'].min():.2f}-"
                   f"{s['rms_over_predicted'].max():.2f}")
+        for check in result.checks:
+            print(f"  {check.line()}")
     print(f"wrote {args.out}/design.toml, design.md, design.png ({result.seconds:.0f} s)")
     return 0

@@ -17,6 +17,7 @@ from ..model.parameters import joint_chi_square, natural_errors
 from ..model.registry import CORE_SPANS, NAMES, group_of
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..sim import simulate
+from .consistency import consistency
 from .parallel import run_all
 
 #: What the paper's noise allows (1 sigma, an efficient estimator's bound): (low, high) per group.
@@ -167,6 +168,11 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
     files.update(frame_files(summary_frame[SUMMARY_COLUMNS], stem, f"{problem.name}: {runs} runs in {elapsed:.0f} s; "
                              "RMS error against the solver's sigma and the predicted sigma (natural units)",
                              display=summary_display(summary_frame)))
+    checks = consistency(rows, summary_frame)
+    if checks:
+        md = stem.with_suffix(".md")
+        text = "\n## Is the sigma honest?\n\n" + "".join(f"- {c.line()}\n" for c in checks)
+        files[md] = files[md] + text.encode()
     import io
 
     plot = io.BytesIO()

@@ -140,3 +140,15 @@ def test_a_schedule_leaving_an_accelerometer_axis_level_is_not_usable(small_prob
     limits = Limits(total_s=400, max_rate_deg_s=14.0)
     designer = Designer(small_problem, limits, Criterion("d", small_problem))
     assert designer.evaluate(level).score.objective == np.inf
+
+
+def test_cli_design_verify_reports_what_its_runs_can_say_of_the_sigma(tmp_path, capsys):
+    out = tmp_path / "d"
+    assert main(["design", "problems/kang2013.toml", "--total-s", "300", "--evaluations", "2", "--verify", "3",
+                 "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    text = (out / "design.md").read_text()
+    assert "at 3 runs an exact sigma gives RMS/sigma in 0.27-1.77 (95 %)" in text
+    assert "summed joint chi-square" in text and "for 63 degrees of freedom" in text
+    mc = next((out / "verify").glob("*-montecarlo.md")).read_text()
+    assert "## Is the sigma honest?" in mc and mc.count("summed joint chi-square") == 2  # nlp and ils
+    assert "an exact sigma gives" in capsys.readouterr().out

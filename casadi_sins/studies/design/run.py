@@ -11,6 +11,7 @@ import numpy as np
 
 from ...data.problem import Problem
 from .. import montecarlo as MC
+from ..consistency import consistency
 from .criteria import Criterion
 from .problemfile import checked_text
 from .report import drawing, markdown
@@ -27,6 +28,7 @@ class DesignRun:
     files: dict
     verify: object = None  # pandas summary of the Monte Carlo, if run
     seconds: float = 0.0
+    checks: list = dataclasses.field(default_factory=list)  # consistency of the Monte Carlo's sigma, per solver
 
 
 def check_limits(limits: Limits) -> None:
@@ -94,13 +96,13 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
               f"{best.score.geometric_mean:.3f}, worst {best.score.ratios.max():.3f}.")
     files = {out / "design.toml": checked_text(problem, base, header).encode(),
              out / "design.png": drawing([base, problem])}
-    summary = None
+    summary, checks = None, []
     if verify_runs:
-        summary, mc_files, line = _verify(problem, best, verify_runs, workers, out, say)
+        summary, checks, mc_files, line = _verify(problem, best, verify_runs, workers, out, say)
         files.update(mc_files)
         extra.append(line)
     files[out / "design.md"] = markdown(base, problem, ref, best.score, settings, extra, "design.png").encode()
-    return DesignRun(best, problem, files, summary, seconds)
+    return DesignRun(best, problem, files, summary, seconds, checks)
 
 
 #: The Monte Carlo's seeds start where ``montecarlo``'s do, so ``--verify N`` and ``montecarlo --runs N`` agree.
@@ -123,4 +125,6 @@ def _verify(problem: Problem, best: Candidate, runs: int, workers, out: Path, sa
                      f"{part['rms_over_sigma'].max():.2f}, / predicted sigma {part['rms_over_predicted'].min():.2f}-"
                      f"{part['rms_over_predicted'].max():.2f}")
     line = f"- Monte Carlo of the design ({runs} runs, {failed} failed; verify/): " + "; ".join(parts)
-    return summary, files, line
+    checks = consistency(rows, summary)
+    line += "".join(f"\n  - {check.line()}" for check in checks)
+    return summary, checks, files, line

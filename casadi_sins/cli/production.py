@@ -153,6 +153,9 @@ def cmd_navcheck_any(args) -> int:
 
 def cmd_budget_any(args) -> int:
     """``budget``: on a problem, or on a unit's recording with its table."""
+    from ..studies.budget import MAX_HOURS
+    if not 0 < args.hours <= MAX_HOURS:
+        raise CliError(f"--hours must be a positive number of at most {MAX_HOURS:g} (six weeks), found {args.hours:g}")
     if not (args.problem and is_recording(args.problem)):
         args.orientation = args.orientation or "ENU"
         return cmd_budget(args)

@@ -41,6 +41,9 @@ from ..report.tables import write_frame
 
 # error state: phi (3), dv_E, dv_N, dL, dlon (nav.errorstate), then the parameter errors (the 21, then any extra groups)
 N_STATE = N_NAV + N_PARAMS
+#: Longest navigation time of a budget, h (six weeks: beyond, the linear model and the noise model are stretched,
+#: and the propagation's one-minute steps add up to a long wait).
+MAX_HOURS = 1000.0
 
 
 def parameter_inputs(attitude: np.ndarray, w_body: np.ndarray, f_body: np.ndarray, names=NAMES):

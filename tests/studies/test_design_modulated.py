@@ -92,6 +92,8 @@ def test_cli_design_with_a_scheme_writes_its_navigation(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--scheme", "dual-axis-16"], "--criterion navigation"),
     (["--criterion", "navigation", "--scheme", "no-such-scheme"], "no-such-scheme"),
+    (["--criterion", "navigation", "--hours", "1e12"], "beyond 1000 h"),
+    (["--criterion", "navigation", "--hours", "nan"], "--hours positive"),
 ])
 def test_cli_design_bad_scheme_is_one_line(tmp_path, capsys, args, message):
     out = tmp_path / "never"

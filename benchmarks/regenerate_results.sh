@@ -29,4 +29,7 @@ python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.
 python benchmarks/bench_mutations.py --seeds 250 --toml-seeds 30 --hostile-seeds 160 --out "$out"  # hostile input (issues 17, 24): 5,031 cases, ~20 min
 python benchmarks/bench_thermal.py --seeds 1 2 3 --out "$out" | tee "$out/thermal-benchmark.txt"   # thermal model, a setpoint left out (issue 30), ~6 min
 casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
+casadi-sins design problems/kang2013.toml --total-s 1290 --criterion navigation --scheme dual-axis-16 --hours 24 --verify 20 --out "$out/design-kang2013-dual-axis-16"   # designed for a modulated INS
+casadi-sins analyze "$out/design-kang2013/design.toml" problems/kang2013.toml --out "$out/design-kang2013/analyze"   # the bar's analyze
+casadi-sins montecarlo "$out/design-kang2013/design.toml" --runs 200 --first-seed 20000 --solvers nlp --out "$out/design-kang2013/verify-200"   # what 200 runs settle
 python benchmarks/bench_design.py --budgets 20 60 300 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality

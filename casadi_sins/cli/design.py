@@ -31,7 +31,8 @@ def add_design_command(sub) -> None:
     p.add_argument("--criterion", default="d", choices=CRITERIA,
                    help="d: log det of the predicted covariance (natural units); a: its trace in units of the "
                    "input's variances; worst: the largest sigma ratio to the input; navigation: static "
-                   "navigation error after --hours (default d)")
+                   "navigation error after --hours, or with --scheme the largest error of the modulated INS "
+                   "(default d)")
     p.add_argument("--hours", type=float, default=1.0, help="navigation time of --criterion navigation, h (default 1)")
     p.add_argument("--scheme", metavar="NAME|FILE",
                    help="with --criterion navigation: the rotation scheme the unit runs in operation (a shipped "
@@ -88,7 +89,8 @@ def cmd_design(args) -> int:
     for group in result.problem.groups:
         print(f"group {group.start}: {' '.join(r.replace(' ', '/') for r in group.rotations)}; statics "
               f"{', '.join(f'{s:g}' for s in group.statics_s)} s")
-    turns = sorted({(abs(s.angle_deg), s.end - s.start) for s in result.problem.segments() if s.kind == "rotation"})
+    turns = sorted({(abs(s.angle_deg), round(s.end - s.start, 3)) for s in result.problem.segments()
+                    if s.kind == "rotation"})
     print(f"turns {', '.join(f'{a:g} deg in {t:g} s' for a, t in turns)}; total {result.problem.duration:.0f} s")
     print(f"predicted sigma against {base.name}: geometric mean {score.geometric_mean:.3f}, worst "
           f"{score.ratios.max():.3f}; criterion {args.criterion} {score.value:+.4f}")

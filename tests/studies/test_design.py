@@ -118,6 +118,9 @@ def test_cli_design_writes_a_problem_that_analyze_takes(tmp_path, capsys):
     problem = load_problem(out / "design.toml")
     assert problem.duration <= 300.0 + 1e-6
     assert (out / "design.png").stat().st_size > 0 and "## Predicted sigma" in (out / "design.md").read_text()
+    printed = capsys.readouterr().out
+    turns = next(line for line in printed.splitlines() if line.startswith("turns "))
+    assert all(turns.count(f"{a} deg in") <= 1 for a in (90, 180))  # each angle once, with its time
     assert main(["analyze", str(out / "design.toml"), "--out", str(tmp_path / "a")]) == 0
 
 

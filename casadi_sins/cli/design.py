@@ -37,7 +37,8 @@ def add_design_command(sub) -> None:
     p.add_argument("--scheme", metavar="NAME|FILE",
                    help="with --criterion navigation: the rotation scheme the unit runs in operation (a shipped "
                    "name such as dual-axis-16 or yu-ruan2014-improved, or a scheme file); the criterion is then "
-                   "the largest position error of the modulated INS over --hours, as modulate reports it")
+                   "the largest position error of the modulated INS over --hours, as modulate --initial aligned "
+                   "reports it with the problem's white noise")
     p.add_argument("--max-rate-deg-s", type=float, help="peak turn rate, deg/s (default: the input schedule's)")
     p.add_argument("--angles", type=_angles, default=(90, 180), help="turn angles allowed, deg (default 90,180)")
     p.add_argument("--min-rest-s", type=float, default=30.0, help="shortest static, s (default 30)")

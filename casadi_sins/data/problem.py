@@ -42,6 +42,10 @@ PROFILES = ("half-sine", "versine")
 HANDLINGS = ("turn", "minimum-jerk")
 
 
+#: Most samples a problem's schedule may have (about 3 h at 100 kHz; a longer one fails only for memory).
+MAX_SAMPLES = 1e9
+
+
 @dataclasses.dataclass(frozen=True)
 class GroupPlan:
     """One group: its start orientation, the rotations (an axis, or ``"axis angle"`` such as ``"-Y 180"``),
@@ -140,7 +144,7 @@ class Problem:
             segs.append(Segment(len(segs) + 1, gi, "static", t, t + durations[0], orientation=plan.start))
             t += durations[0]
             turn_s = plan.rotations_s or (self.timing.rotation_s,) * len(plan.rotations)
-            for (axis, angle), duration, rotation_s in zip(plan.turns(), durations[1:], turn_s):
+            for (axis, angle), duration, rotation_s in zip(plan.turns(), durations[1:], turn_s, strict=True):
                 segs.append(Segment(len(segs) + 1, gi, "rotation", t, t + rotation_s, axis=axis, angle_deg=angle))
                 t += rotation_s
                 dcm = orient.rotate_body(dcm, axis, math.radians(angle))
@@ -313,4 +317,8 @@ def load_problem(path: str | Path | None = None) -> Problem:
         problem.segments()
     except orient.OrientationError as exc:
         raise InputError(path, f"a rotation angle leads off the letter orientations ({exc})") from None
+    samples = problem.duration * problem.rate_hz
+    if not samples <= MAX_SAMPLES:
+        raise InputError(path, f"the schedule lasts {problem.duration:.3g} s at {problem.rate_hz:g} Hz, {samples:.3g} "
+                         f"samples: more than {MAX_SAMPLES:.0e} (a calibration runs minutes to hours)")
     return problem

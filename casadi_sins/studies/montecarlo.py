@@ -168,16 +168,16 @@ def montecarlo_files(problem: Problem, rows: pd.DataFrame, summary_frame: pd.Dat
     files.update(frame_files(summary_frame[SUMMARY_COLUMNS], stem, f"{problem.name}: {runs} runs in {elapsed:.0f} s; "
                              "RMS error against the solver's sigma and the predicted sigma (natural units)",
                              display=summary_display(summary_frame)))
-    checks = consistency(rows, summary_frame)
+    checks = consistency(rows)
     if checks:
-        md = stem.with_suffix(".md")
+        md = stem.with_name(stem.name + ".md")  # not with_suffix: a name may hold a dot
         text = "\n## Is the sigma honest?\n\n" + "".join(f"- {c.line()}\n" for c in checks)
         files[md] = files[md] + text.encode()
     import io
 
     plot = io.BytesIO()
     plot_summary(summary_frame, plot)
-    files[stem.with_suffix(".png")] = plot.getvalue()
+    files[stem.with_name(stem.name + ".png")] = plot.getvalue()
     return files
 
 

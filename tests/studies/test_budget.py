@@ -85,3 +85,14 @@ def test_an_extra_groups_error_at_rest_acts_as_the_bias_its_physics_gives(kang_p
     run = [B.problem_budget(kang_problem, nominal, cov, "ENU", 2.0, names).total for cov in (extra_cov, bias_cov)]
     np.testing.assert_allclose(run[0], run[1], rtol=1e-6, atol=1e-9)
     assert run[0][-1].max() > 1e-3
+
+
+@pytest.mark.parametrize("hours", ["1e7", "nan", "0", "1001"])
+def test_budget_hours_beyond_the_limit_are_one_line(tmp_path, capsys, hours):
+    from casadi_sins.cli import main
+
+    out = tmp_path / "b"
+    assert main(["budget", "problems/kang2013.toml", "--hours", hours, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "at most 1000" in err
+    assert not out.exists()

@@ -36,7 +36,7 @@ def _attitudes(plan: GroupPlan):
 
 
 @pytest.mark.parametrize("axes", [1, 2, 3])
-def test_random_designs_keep_the_budget_and_the_table(axes):
+def test_random_designs_keep_the_budget_and_the_table(axes, kang_problem):
     limits = Limits(total_s=1500, max_rate_deg_s=14.0, table_axes=axes)
     rng = np.random.default_rng(axes)
     for _ in range(20):
@@ -47,6 +47,10 @@ def test_random_designs_keep_the_budget_and_the_table(axes):
         for times, low in zip(statics, minimum_rests(groups, limits)):
             assert np.all(times >= low - 1e-9)
         assert sum(t.sum() for t in statics) == pytest.approx(static_budget(groups, limits))
+        problem = design_problem(kang_problem, groups, statics, limits)
+        assert problem.duration <= limits.total_s + 1e-6
+        turns = [s for s in problem.segments() if s.kind == "rotation"]
+        assert [s.end - s.start for s in turns] == pytest.approx([limits.rotation_s(abs(s.angle_deg)) for s in turns])
         for g, times in zip(groups, statics):
             plan = group_plan(g, times, limits)
             mount = parse_axis("+" + g.mount)
@@ -150,7 +154,7 @@ def test_cli_design_verify_reports_what_its_runs_can_say_of_the_sigma(tmp_path, 
     assert main(["design", "problems/kang2013.toml", "--total-s", "300", "--evaluations", "2", "--verify", "3",
                  "--workers", "1", "--quiet", "--out", str(out)]) == 0
     text = (out / "design.md").read_text()
-    assert "at 3 runs an exact sigma gives RMS/sigma in 0.27-1.77 (95 %)" in text
+    assert "at 3 runs an exact sigma gives each in 0.27-1.77 (95 %)" in text
     assert "summed joint chi-square" in text and "for 63 degrees of freedom" in text
     mc = next((out / "verify").glob("*-montecarlo.md")).read_text()
     assert "## Is the sigma honest?" in mc and mc.count("summed joint chi-square") == 2  # nlp and ils

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from casadi_sins.cli import main
-from casadi_sins.data.problem import GroupPlan
+from casadi_sins.data.problem import GroupPlan, load_problem
 from casadi_sins.model.registry import GROUPS, NAMES
 from casadi_sins.studies.budget import problem_budget
 from casadi_sins.studies.design.criteria import Criterion
@@ -86,7 +86,9 @@ def test_cli_design_with_a_scheme_writes_its_navigation(tmp_path):
     assert main(["design", "problems/kang2013.toml", "--total-s", "300", "--evaluations", "2", "--criterion",
                  "navigation", "--scheme", "dual-axis-16", "--hours", "4", "--quiet", "--out", str(out)]) == 0
     text = (out / "design.md").read_text()
-    assert "under rotation scheme dual-axis-16" in text and "input" in text
+    reference = Criterion("navigation", load_problem("problems/kang2013.toml"), hours=4.0,
+                          scheme=load_scheme("dual-axis-16")).ref_navigation
+    assert "under rotation scheme dual-axis-16: design " in text and f"input {reference:.4g} m" in text
 
 
 @pytest.mark.parametrize("args, message", [

@@ -125,6 +125,6 @@ def _verify(problem: Problem, best: Candidate, runs: int, workers, out: Path, sa
                      f"{part['rms_over_sigma'].max():.2f}, / predicted sigma {part['rms_over_predicted'].min():.2f}-"
                      f"{part['rms_over_predicted'].max():.2f}")
     line = f"- Monte Carlo of the design ({runs} runs, {failed} failed; verify/): " + "; ".join(parts)
-    checks = consistency(rows, summary)
+    checks = consistency(rows)
     line += "".join(f"\n  - {check.line()}" for check in checks)
     return summary, checks, files, line

@@ -30,6 +30,8 @@ python benchmarks/bench_mutations.py --seeds 250 --toml-seeds 30 --hostile-seeds
 python benchmarks/bench_thermal.py --seeds 1 2 3 --out "$out" | tee "$out/thermal-benchmark.txt"   # thermal model, a setpoint left out (issue 30), ~6 min
 casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
 casadi-sins design problems/kang2013.toml --total-s 1290 --criterion navigation --scheme dual-axis-16 --hours 24 --verify 20 --out "$out/design-kang2013-dual-axis-16"   # designed for a modulated INS
+casadi-sins design problems/kang2013.toml --total-s 1290 --seed 1 --out "$out/design-kang2013-seed1"   # another search seed
+casadi-sins design problems/kang2013.toml --total-s 1290 --angles 90 --out "$out/design-kang2013-angles90"   # 90 deg turns only
 casadi-sins analyze "$out/design-kang2013/design.toml" problems/kang2013.toml --out "$out/design-kang2013/analyze"   # the bar's analyze
 casadi-sins montecarlo "$out/design-kang2013/design.toml" --runs 200 --first-seed 20000 --solvers nlp --out "$out/design-kang2013/verify-200"   # what 200 runs settle
 python benchmarks/bench_design.py --budgets 20 60 300 --out "$out" | tee "$out/design-benchmark.txt"            # search budget against quality

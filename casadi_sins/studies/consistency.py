@@ -17,7 +17,6 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 #: Two-sided probability of the bands.
 LEVEL = 0.95
@@ -25,12 +24,16 @@ LEVEL = 0.95
 
 def rms_ratio_band(runs: int, level: float = LEVEL) -> tuple[float, float]:
     """The range of RMS error / sigma that ``runs`` runs give with probability ``level`` for an exact sigma."""
+    from scipy import stats  # loaded when a Monte Carlo is judged, not at every command's start
+
     tail = (1.0 - level) / 2.0
     return (float(np.sqrt(stats.chi2.ppf(tail, runs) / runs)), float(np.sqrt(stats.chi2.ppf(1.0 - tail, runs) / runs)))
 
 
 def chi_square_band(dof: int, level: float = LEVEL) -> tuple[float, float]:
     """The ``level`` two-sided range of a chi-square with ``dof`` degrees of freedom."""
+    from scipy import stats
+
     tail = (1.0 - level) / 2.0
     return float(stats.chi2.ppf(tail, dof)), float(stats.chi2.ppf(1.0 - tail, dof))
 
@@ -96,6 +99,8 @@ class Consistency:
 def consistency(rows: pd.DataFrame, level: float = LEVEL) -> list[Consistency]:
     """Per solver: the per-parameter band check of the RMS of error/sigma and the joint chi-square test of a
     Monte Carlo (the runs of :mod:`studies.montecarlo`; failed runs left out)."""
+    from scipy import stats
+
     ok = rows[rows["failed"] == ""] if "failed" in rows else rows
     out = []
     for solver, part in ok.groupby("solver", sort=False):

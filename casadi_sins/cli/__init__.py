@@ -68,13 +68,57 @@ def _termination_handled():
             signal.signal(sig, old)
 
 
+class _ClosedReaderSafe:
+    """Standard output that outlives its reader: once a pipe's reader has gone (``casadi-sins ... | head``),
+    the rest of the summary goes to the null device, so the command still finishes and writes its files
+    (which a broken pipe would otherwise abandon, every output being written together at the end)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._to_null()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._to_null()
+
+    def _to_null(self) -> None:
+        try:  # the interpreter's last flush at exit then finds a sink, not a closed pipe
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self._stream.fileno())
+            os.close(null)
+        except (OSError, ValueError, AttributeError):  # a stream without a descriptor (a test's capture)
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+@contextlib.contextmanager
+def _reader_may_leave():
+    """:class:`_ClosedReaderSafe` as ``sys.stdout`` while a command runs."""
+    previous = sys.stdout
+    sys.stdout = _ClosedReaderSafe(previous)
+    try:
+        yield
+    finally:
+        sys.stdout = previous
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``casadi-sins`` with ``argv``; returns the exit status (0; 2 for a failure told in one line; 130
     interrupted; 143 terminated)."""
     args = build_parser().parse_args(argv)
     name = f"casadi-sins {args.command}"
     try:
-        with _termination_handled(), guarded_inputs(command_inputs(args)):
+        with _termination_handled(), _reader_may_leave(), guarded_inputs(command_inputs(args)):
             if getattr(args, "out", None):
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
             with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS

@@ -117,3 +117,18 @@ def test_compressed_data_are_read(recording):
 def test_python_dash_m_runs_the_command_line():
     done = subprocess.run([sys.executable, "-m", "casadi_sins", "--version"], capture_output=True, text=True)
     assert done.returncode == 0 and done.stdout.startswith("casadi-sins ")
+
+
+def test_a_reader_that_leaves_early_loses_no_output(recording, tmp_path):
+    """``casadi-sins calibrate ... | head -1``: the summary's reader goes away after a line; the table is still
+    written whole and the command ends normally (every output is written together, so a broken pipe must not
+    abandon them)."""
+    table = tmp_path / "t.csv"
+    script = "import sys; from casadi_sins.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.Popen([sys.executable, "-c", script, "calibrate", str(recording), "--quiet", "--out", str(table)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 0, err
+    assert "Traceback" not in err and "Broken pipe" not in err
+    assert len(table.read_text().splitlines()) > 21

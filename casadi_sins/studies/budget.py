@@ -233,11 +233,17 @@ def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame
     return table
 
 
+def white_noise_densities(problem) -> tuple[np.ndarray, np.ndarray]:
+    """A problem's white-noise densities per axis: gyro ARW (rad/sqrt(s)) and accelerometer VRW (m/s/sqrt(s))."""
+    noise = SensorNoise.from_deviations(problem.deviations, 1.0 / problem.rate_hz)
+    return np.asarray(noise.gyro_arw, float), np.asarray(noise.accel_vrw, float)
+
+
 def white_noise_per_sample(problem) -> tuple[float, float]:
     """A problem's white accelerometer (ug) and gyro (deg/h) noise per sample, densities included."""
     dt = 1.0 / problem.rate_hz
-    noise = SensorNoise.from_deviations(problem.deviations, dt)
-    return float(noise.accel_vrw[0]) / dt**0.5 / UG, float(noise.gyro_arw[0]) / dt**0.5 / DEG_PER_H
+    gyro_arw, accel_vrw = white_noise_densities(problem)
+    return float(accel_vrw[0]) / dt**0.5 / UG, float(gyro_arw[0]) / dt**0.5 / DEG_PER_H
 
 
 def problem_budget(problem, nominal: np.ndarray, covariance: np.ndarray, orientation: str = "ENU",

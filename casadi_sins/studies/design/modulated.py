@@ -17,19 +17,13 @@ import numpy as np
 
 from ...core.errors import InputError
 from ...data.problem import Problem
-from ...model.noise import SensorNoise
 from ...model.registry import NAMES
+from ..budget import white_noise_densities
 from ..modulation import model as M
 from ..modulation.calibrated import parameter_sources
 from ..modulation.covariance import propagate
 from ..modulation.designer import criterion_value
 from ..modulation.schemes import Scheme
-
-
-def white_noise_densities(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
-    """A problem's white-noise densities: gyro ARW (rad/sqrt(s)) and accelerometer VRW (m/s/sqrt(s))."""
-    noise = SensorNoise.from_deviations(problem.deviations, 1.0 / problem.rate_hz)
-    return np.asarray(noise.gyro_arw, float), np.asarray(noise.accel_vrw, float)
 
 
 class ModulatedNavigation:

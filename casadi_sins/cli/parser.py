@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..core.version import __version__
+from ..core.version import build_identity
 from ..report.exports import EXPORTS
 from .commands import (cmd_analyze, cmd_calibrate, cmd_compare, cmd_demo, cmd_montecarlo,
                        cmd_navigate, cmd_rough, cmd_segment, cmd_validate)
@@ -22,7 +22,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     parser = argparse.ArgumentParser(
         prog="casadi-sins",
         description="System-level calibration of strapdown inertial navigation systems (21-parameter model).")
-    parser.add_argument("--version", action="version", version=f"casadi-sins {__version__}")
+    parser.add_argument("--version", action="version", version=build_identity())
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth (a thermal "

@@ -5,7 +5,34 @@ from __future__ import annotations
 import functools
 import platform
 
-__version__ = "0.2.0"
+
+def _build_identity() -> tuple[str, str | None, str | None]:
+    """(version, commit, commit date) of this build.
+
+    setuptools-scm writes ``casadi_sins/_version.py`` when the package is built or installed (from the
+    git tag ``vX.Y.Z`` and the commit); a source tree that was never built has no such file and reads
+    ``unknown``.
+    """
+    try:
+        from .. import _version
+    except ImportError:
+        return "unknown (not built: pip install the checkout)", None, None
+    commit = _version.__commit__ if _version.__commit__ not in ("None", "") else None
+    if commit and commit.startswith("g"):
+        commit = commit[1:]
+    if commit and _version.__dirty__:
+        commit += " with uncommitted changes"
+    date = _version.__commit_date__ if _version.__commit_date__ not in ("None", "") else None
+    return _version.__version__, commit, date
+
+
+__version__, __commit__, __commit_date__ = _build_identity()
+
+
+def build_identity() -> str:
+    """One line naming this build: ``casadi-sins 0.3.0 (commit 1a2b3c4, 2026-11-27)``."""
+    details = ", ".join(x for x in (f"commit {__commit__}" if __commit__ else None, __commit_date__) if x)
+    return f"casadi-sins {__version__}" + (f" ({details})" if details else "")
 
 
 @functools.lru_cache(maxsize=None)
@@ -18,7 +45,7 @@ def software_versions() -> dict[str, str]:
     import casadi
     import numpy
 
-    return {"casadi-sins": __version__, "casadi": casadi.__version__, "ipopt": _ipopt_version(casadi),
+    return {"casadi-sins": __version__, "casadi-sins commit": __commit__ or "unknown", "casadi": casadi.__version__, "ipopt": _ipopt_version(casadi),
             "numpy": numpy.__version__, "python": platform.python_version()}
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.version import __version__, software_versions
+from ..core.version import build_identity, software_versions
 from ..calibrate.result import CalibrationResult
 from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS
 from ..core.units import DEG_PER_H, UG
@@ -129,7 +129,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
     motion = result.base_motion
     data = {
         "format": "casadi-sins-report/1",
-        "software": f"casadi-sins {__version__}",
+        "software": build_identity(),
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "versions": software_versions(),
         "command": command,

@@ -27,7 +27,7 @@ import re
 import numpy as np
 
 from ..core.text import code_comment
-from ..core.version import __version__
+from ..core.version import build_identity
 from ..model.output import compensation_matrices, sensor_matrices
 from ..model.parameters import ParameterSet
 from ..model.registry import GROUPS
@@ -67,7 +67,7 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
     unit = str(metadata.get("unit_id", ""))
     tag = hashlib.sha256(unit.encode("utf-8", "surrogatepass")).hexdigest()[:8].upper()  # SN-1 and SN_1 differ
     guard = f"CASADI_SINS_COMPENSATION_{re.sub(r'[^A-Z0-9]', '_', unit.upper())[:60]}_{tag}_H"
-    lines = ["/* Sensor compensation of a strapdown IMU, written by casadi-sins " + __version__ + ".",
+    lines = ["/* Sensor compensation of a strapdown IMU, written by " + build_identity() + ".",
              " *",
              " * Per sample interval of length dt (s), from the raw pulses dN_g, dN_a of the three gyros and",
              " * three accelerometers (body axes x, y, z):",

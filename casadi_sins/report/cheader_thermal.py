@@ -17,7 +17,7 @@ arcseconds).  Extra groups beyond the 21 are not compensated (``CASADI_SINS_EXTR
 
 from __future__ import annotations
 
-from ..core.version import __version__
+from ..core.version import build_identity
 from ..model.registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GYRO_BIAS,
                               GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, NAMES)
 from ..model.thermal import ThermalModel
@@ -70,7 +70,7 @@ def c_header_thermal(model: ThermalModel, metadata: dict | None = None) -> str:
     metadata = {k: v for k, v in (metadata or {}).items() if v is not None}
     extras = model.names[N_PARAMS:]
     guard = "CASADI_SINS_THERMAL_COMPENSATION_H"
-    lines = ["/* Temperature-dependent compensation of a strapdown IMU, written by casadi-sins " + __version__ + ".",
+    lines = ["/* Temperature-dependent compensation of a strapdown IMU, written by " + build_identity() + ".",
              " *",
              " * Each of the 21 parameters of the output model (Kang et al. 2013, eq. 1), SI, table order:",
              f" *     p(T) = p_ref + a1 d + a2 d^2,   d = T - {model.reference_c!r} degC",

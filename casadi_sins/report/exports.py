@@ -30,7 +30,7 @@ import json
 import numpy as np
 
 from ..core.text import code_comment
-from ..core.version import __version__
+from ..core.version import build_identity
 from ..model.output import sensor_matrices
 from ..model.parameters import ParameterSet
 from ..model.registry import EXTRA_GROUPS, GROUPS, N_PARAMS, unit_of
@@ -42,7 +42,7 @@ def compensation(params: ParameterSet, metadata: dict | None = None) -> dict:
     k_a, s_a, b_a, k_g, s_g, b_g = (np.asarray(m, dtype=float) for m in sensor_matrices(params.core))
     sigma = dict(zip(params.names, params.sigma)) if params.sigma is not None else {}
     out = {"format": "casadi-sins-compensation/1",
-           "metadata": {"software": f"casadi-sins {__version__}",
+           "metadata": {"software": build_identity(),
                         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                         **(metadata or {})},
            "model": "dtheta = M_g dN_g + c_g dt, dv = M_a dN_a + c_a dt; M = K^-1 diag(S), c = -K^-1 B "
@@ -117,7 +117,7 @@ def psins_clbt(params: ParameterSet, pulse_gyro: float | None = None, pulse_acce
         return "[" + "; ".join(" ".join(repr(float(x) + 0.0) for x in row) for row in m) + "]"  # no -0
 
     k_g_inv, k_a_inv = np.linalg.inv(k_g), np.linalg.inv(k_a)
-    lines = [f"% PSINS clbt struct from casadi-sins {__version__}",
+    lines = [f"% PSINS clbt struct from {build_identity()}",
              f"% wm = {p_g!r} * dN_g (rad), vm = {p_a!r} * dN_a (m/s); then wm' = Kg*wm - eb*ts, "
              "vm' = Ka*vm - db*ts"]
     lines += [f"% {code_comment(k)}: {code_comment(v)}" for k, v in (metadata or {}).items()]

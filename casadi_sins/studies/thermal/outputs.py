@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core.version import __version__
+from ...core.version import build_identity
 from ...data.tables import table_text
 from ...data.thermal import write_thermal
 from ...model.registry import GROUPS, natural_scale_of, natural_unit_of, relative_mask
@@ -87,7 +87,7 @@ def thermal_markdown(fit: ThermalFit, ats: list[float], notes: list[str]) -> str
 def at_report(model: ThermalModel, temperature_c: float, unit_id: str | None) -> dict:
     """The companion report of a table at a temperature: its covariance and conditions (report keys)."""
     params = model.at(temperature_c)
-    return {"format": "casadi-sins-report/1", "software": f"casadi-sins {__version__}",
+    return {"format": "casadi-sins-report/1", "software": build_identity(),
             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "unit_id": unit_id, "solver": "thermal",
             "message": f"evaluated from the thermal model at {temperature_c:g} degC (reference "
@@ -141,7 +141,7 @@ def thermal_files(fit: ThermalFit, out: str | Path, ats: list[float], notes: lis
                   plots: bool = True) -> dict[Path, bytes]:
     """``{path: bytes}`` of every output of a thermal fit in the folder ``out``."""
     out = Path(out)
-    extra = {"software": f"casadi-sins {__version__}", "unit_id": unit_id,
+    extra = {"software": build_identity(), "unit_id": unit_id,
              "calibrations": [{"table": p.label, "temperature_c": p.temperature_c} for p in fit.points],
              "chi2": fit.chi2.tolist(), "dof": fit.dof.tolist(), "sigma_widened_by": fit.widened.tolist(),
              "a2_over_sigma_quadratic_fit": [None if not np.isfinite(z) else float(z) for z in fit.a2_z],

@@ -22,14 +22,46 @@ and on the line, a table applied to raw pulses in a DataFrame (as ``casadi-sins 
     increments = read_table("unit42.csv").compensate(raw)   # columns time, gyro_x.., accel_x..
 """
 
-from .calibrate import CalibrationError, CalibrationResult, calibrate
-from .core.errors import InputError
-from .core.version import __version__
-from .data.description import read_recording, write_recording
-from .data.problem import load_problem
-from .data.tables import Table, read_table, write_table
-from .model.parameters import ParameterSet
-from .sim import simulate
+import importlib
+import sys
+import types
 
-__all__ = ["__version__", "CalibrationError", "CalibrationResult", "InputError", "ParameterSet", "Table", "calibrate",
-           "load_problem", "read_recording", "read_table", "simulate", "write_recording", "write_table"]
+from .core.version import __version__
+
+#: The public names and the module each comes from; each is imported on first use, so that importing
+#: the package (and ``casadi-sins --help`` or ``--version``) loads neither CasADi nor pandas.
+_PUBLIC = {
+    "CalibrationError": ".calibrate", "CalibrationResult": ".calibrate", "calibrate": ".calibrate",
+    "InputError": ".core.errors", "read_recording": ".data.description", "write_recording": ".data.description",
+    "load_problem": ".data.problem", "Table": ".data.tables", "read_table": ".data.tables",
+    "write_table": ".data.tables", "ParameterSet": ".model.parameters", "simulate": ".sim",
+}
+
+__all__ = ["__version__", *sorted(_PUBLIC)]
+
+
+def __getattr__(name: str):
+    if name in _PUBLIC:
+        return getattr(importlib.import_module(_PUBLIC[name], __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
+
+
+class _Package(types.ModuleType):
+    """The package's module type: ``casadi_sins.calibrate`` is the function :func:`calibrate` (as it was when
+    the package imported it eagerly), although the subpackage of the same name binds itself here when it is
+    imported."""
+
+    @property
+    def calibrate(self):
+        return getattr(importlib.import_module(".calibrate", __name__), "calibrate")
+
+    @calibrate.setter
+    def calibrate(self, value) -> None:  # the import system binding the subpackage: the name stays the function
+        pass
+
+
+sys.modules[__name__].__class__ = _Package

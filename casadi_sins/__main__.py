@@ -1,5 +1,5 @@
 """``python -m casadi_sins``: the command line."""
 
-from .cli import console
+from .console import console
 
 console()

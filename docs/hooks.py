@@ -69,11 +69,13 @@ def typeset_math(markdown: str) -> str:
     return "".join(parts)
 
 
-def on_post_build(config) -> None:
-    """Warn about public modules that no API page documents."""
+def undocumented_modules(docs_dir: Path = ROOT / "docs") -> list[str]:
+    """The package's public modules (every module and package below ``casadi_sins/`` whose dotted name has no
+    part starting with ``_``) that no ``::: casadi_sins...`` entry on a page of ``docs_dir/api`` documents."""
     documented = set()
-    for page in (Path(config["docs_dir"]) / "api").glob("*.md"):
+    for page in (Path(docs_dir) / "api").glob("*.md"):
         documented.update(API_ENTRY.findall(page.read_text(encoding="utf-8")))
+    missing = []
     for source in sorted((ROOT / "casadi_sins").rglob("*.py")):
         parts = source.relative_to(ROOT).with_suffix("").parts
         if parts[-1] == "__init__":
@@ -82,7 +84,14 @@ def on_post_build(config) -> None:
             continue
         name = ".".join(parts)
         if name not in documented:
-            LOG.warning("module %s has no '::: %s' entry on any page of docs/api/", name, name)
+            missing.append(name)
+    return missing
+
+
+def on_post_build(config) -> None:
+    """Warn about public modules that no API page documents."""
+    for name in undocumented_modules(Path(config["docs_dir"])):
+        LOG.warning("module %s has no '::: %s' entry on any page of docs/api/", name, name)
 
 
 def _argument_row(action: argparse.Action) -> str:

@@ -7,6 +7,7 @@ every test that only reads them.
 from __future__ import annotations
 
 import dataclasses
+import os
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,10 @@ from casadi_sins.data.description import read_recording
 from casadi_sins.data.problem import load_problem
 from casadi_sins.data.tables import read_table
 from casadi_sins.sim import simulate
+
+# Child Pythons (``python -m casadi_sins``, ``python -c``) must import the package the suite tests, the
+# installed one, not the checkout they happen to start in: no current folder on their module path.
+os.environ["PYTHONSAFEPATH"] = "1"
 
 #: The PSINS 19-position recording, converted to our format (see its README).
 PEER = Path(__file__).resolve().parent / "fixtures" / "psins-19pos"

@@ -11,11 +11,12 @@ import contextlib
 import os
 import signal
 import sys
-import threading
 import traceback
 
 from ..calibrate.result import CalibrationError
+from ..core import signals
 from ..core.errors import InputError, OutputError
+from ..core.signals import Terminated
 from ..core.files import check_writable, gathered_writes
 from ..core.guard import guarded_inputs
 from ..core.text import one_line
@@ -30,42 +31,19 @@ FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "n
 #: Commands that write as they go by design (a resumable ledger); every other one writes all at the end.
 INCREMENTAL_OUTPUTS = {"batch"}
 
-__all__ = ["main", "console", "build_parser", "CliError", "Terminated"]
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP: handled as Ctrl-C is (everything stops, nothing half-written), told apart."""
-
-
-#: The signal received while the current command runs (0: none): whatever a library turns it into (CasADi
-#: reports an interrupted Ipopt as a RuntimeError), the command ends as interrupted or terminated.
-_received = 0
+__all__ = ["main", "build_parser", "CliError", "Terminated"]
 
 
 @contextlib.contextmanager
 def _termination_handled():
     """SIGTERM and SIGHUP raise :class:`Terminated`, SIGINT KeyboardInterrupt, in the main thread while the
-    command runs; each is remembered (:data:`_received`)."""
-    global _received
-    _received = 0
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum, frame):
-        global _received
-        _received = _received or signum
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise Terminated(signal.Signals(signum).name)
-
-    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT)
-                if sig != signal.SIGINT or signal.getsignal(sig) is signal.default_int_handler}
+    command runs; each is remembered (:func:`..core.signals.received`)."""
+    signals.reset()
+    previous = signals.install()
     try:
         yield
     finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old)
+        signals.restore(previous)
 
 
 class _ClosedReaderSafe:
@@ -130,18 +108,18 @@ def main(argv: list[str] | None = None) -> int:
 
 def _outcome(name: str, exc: BaseException) -> int:
     """The exit status of a command that raised ``exc`` (and its one line on standard error)."""
-    if _received and not isinstance(exc, (KeyboardInterrupt, SystemExit)):  # a signal turned into another error
-        exc = Terminated() if _received != signal.SIGINT else KeyboardInterrupt()
+    if signals.received() and not isinstance(exc, (KeyboardInterrupt, SystemExit)):  # a signal turned into another error
+        exc = Terminated() if signals.received() != signal.SIGINT else KeyboardInterrupt()
     try:
         raise exc
     except (InputError, OutputError, CliError, CalibrationError) as exc:
         return _fail(name, one_line(exc, 2000))
     except Terminated:
         print("terminated", file=sys.stderr)
-        return 143
+        return signals.TERMINATED
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        return 130
+        return signals.INTERRUPTED
     except MemoryError:
         return _fail(name, "not enough memory for this command (a larger machine, or a shorter recording)")
     except ImportError as exc:
@@ -160,12 +138,3 @@ def _outcome(name: str, exc: BaseException) -> int:
 def _fail(name: str, message: str, status: int = 2) -> int:
     print(f"{name}: error: {message}", file=sys.stderr)
     return status
-
-
-def console() -> None:
-    """The ``casadi-sins`` console script: :func:`main`, then an exit that no late signal can turn into a
-    traceback (the interpreter's shutdown ignores Ctrl-C and SIGTERM)."""
-    status = main()
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, signal.SIG_IGN)
-    sys.exit(status)

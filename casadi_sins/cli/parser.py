@@ -17,12 +17,20 @@ from .thermal import add_thermal_command, cmd_export_any, cmd_simulate_any
 from .scheme_design import add_design_command
 
 
+class _PrintVersion(argparse.Action):
+    """``--version``: the build identity on one line (argparse's own action would wrap it)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(build_identity())
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, every option in one place)
     """The argument parser of ``casadi-sins``."""
     parser = argparse.ArgumentParser(
         prog="casadi-sins",
         description="System-level calibration of strapdown inertial navigation systems (21-parameter model).")
-    parser.add_argument("--version", action="version", version=build_identity())
+    parser.add_argument("--version", action=_PrintVersion, nargs=0, help="print the build (version, commit) and exit")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("simulate", help="simulate a problem's experiment into a recording and its truth (a thermal "

@@ -20,6 +20,7 @@ def _build_identity() -> tuple[str, str | None, str | None]:
     commit = _version.__commit__ if _version.__commit__ not in ("None", "") else None
     if commit and commit.startswith("g"):
         commit = commit[1:]
+    commit = commit[:12] if commit else None
     if commit and _version.__dirty__:
         commit += " with uncommitted changes"
     date = _version.__commit_date__ if _version.__commit_date__ not in ("None", "") else None

@@ -14,6 +14,7 @@ import pytest
 import casadi_sins.cli as cli
 from casadi_sins.calibrate.initial import rough_parameters
 from casadi_sins.cli import main
+from casadi_sins.core import signals
 from casadi_sins.core.errors import InputError
 from casadi_sins.core.files import gathered_writes, safe_stem, write_files
 from casadi_sins.core.text import decimal_number, spreadsheet_cell
@@ -252,11 +253,11 @@ def read_table_like():
 
 
 def test_a_signal_turned_into_another_error_is_still_an_interruption(monkeypatch, capsys):
-    monkeypatch.setattr(cli, "_received", signal.SIGINT)
+    monkeypatch.setattr(signals, "_received", signal.SIGINT)
     assert cli._outcome("casadi-sins x", RuntimeError("Error in Function::call for 'solver' [IpoptInterface]")) == 130
-    monkeypatch.setattr(cli, "_received", signal.SIGTERM)
+    monkeypatch.setattr(signals, "_received", signal.SIGTERM)
     assert cli._outcome("casadi-sins x", RuntimeError("x")) == 143
-    monkeypatch.setattr(cli, "_received", 0)
+    monkeypatch.setattr(signals, "_received", 0)
     assert cli._outcome("casadi-sins x", InputError("f", "bad")) == 2
 
 

@@ -1,0 +1,84 @@
+"""Signals as exceptions, from the first instant of a command to its last.
+
+Ctrl-C (SIGINT) raises :class:`KeyboardInterrupt`, SIGTERM and SIGHUP raise :class:`Terminated` (a
+subclass, so that every ``except KeyboardInterrupt`` cleanup runs for both), in the main thread. The
+signal received is remembered (:func:`received`): a library may turn the exception into an error of
+its own (CasADi reports an interrupted Ipopt as a ``RuntimeError``), and the command still ends as
+interrupted (exit status 130) or terminated (143).
+
+This module imports nothing but the standard library: the console script installs its handlers
+before the package's heavy imports (CasADi, pandas), so that a signal during the start-up is told in
+one line like any other.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+
+#: Exit status of a command ended by Ctrl-C, and by SIGTERM or SIGHUP (128 + SIGINT, 128 + SIGTERM).
+INTERRUPTED, TERMINATED = 130, 143
+
+HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+_received = 0
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP: handled as Ctrl-C is (everything stops, nothing half-written), told apart."""
+
+
+def received() -> int:
+    """The signal received since :func:`reset` (0: none)."""
+    return _received
+
+
+def reset() -> None:
+    """Forget the signal received (a new command starts)."""
+    global _received
+    _received = 0
+
+
+def _handler(signum, frame):  # noqa: ARG001 (the signal module's signature)
+    global _received
+    _received = _received or signum
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Terminated(signal.Signals(signum).name)
+
+
+def install() -> dict:
+    """Handle SIGINT, SIGTERM and SIGHUP as exceptions in the main thread; returns the handlers replaced
+    (for :func:`restore`). Elsewhere than in the main thread nothing is changed (``{}``). A SIGINT
+    handler of the caller's own (not Python's default) is left in place."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    previous = {}
+    for sig in HANDLED:
+        current = signal.getsignal(sig)
+        if sig == signal.SIGINT and current not in (signal.default_int_handler, _handler):
+            continue
+        previous[sig] = signal.signal(sig, _handler)
+    return previous
+
+
+def restore(previous: dict) -> None:
+    """Put back the handlers :func:`install` replaced."""
+    for sig, old in previous.items():
+        signal.signal(sig, old)
+
+
+def ignore_all() -> None:
+    """Ignore every handled signal: for the interpreter's shutdown, which no late signal may turn into a
+    traceback once a command has decided its exit status."""
+    for sig in HANDLED:
+        signal.signal(sig, signal.SIG_IGN)
+
+
+def exit_status(exc: BaseException) -> int | None:
+    """130 or 143 when ``exc`` (or a signal received meanwhile) ends the command, else ``None``."""
+    if isinstance(exc, Terminated) or _received in (signal.SIGTERM, signal.SIGHUP):
+        return TERMINATED
+    if isinstance(exc, KeyboardInterrupt) or _received == signal.SIGINT:
+        return INTERRUPTED
+    return None

@@ -2,7 +2,6 @@
 name, imports only downward (a study may use everything but the command line), and the packaging."""
 
 import ast
-import tomllib
 from pathlib import Path
 
 import pytest
@@ -34,11 +33,3 @@ def test_the_study_imports_only_downward(path):
             assert node.module.split(".")[0] in BELOW_CLI, node.module
         elif isinstance(node, ast.ImportFrom) and node.level == 0:
             assert not (node.module or "").startswith("casadi_sins"), node.module
-
-
-def test_the_subpackage_and_the_shipped_schemes_are_packaged():
-    setup = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    assert {"casadi_sins.studies.modulation", "casadi_sins.problems.schemes"} <= set(setup["packages"])
-    assert setup["package-dir"]["casadi_sins.problems.schemes"] == "problems/schemes"
-    assert setup["package-data"]["casadi_sins.problems.schemes"] == ["*.toml"]
-    assert (ROOT / "problems" / "schemes" / "__init__.py").exists()

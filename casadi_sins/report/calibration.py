@@ -36,7 +36,7 @@ from .certificate import certificate_html
 from .grade import grade_data, grade_markdown
 from .plots import noise_plot, residual_plot
 from .rounding import parameter_display
-from .tables import calibration_tables, markdown_table, natural_noise_frame
+from .tables import calibration_tables, checks_frame, markdown_table, natural_noise_frame
 
 
 def recording_hash(rec) -> str | None:
@@ -227,8 +227,7 @@ def report_markdown(data: dict) -> str:
     lines += _model_lines(data.get("model"))
     lines += ["", "## Checks", ""]
     if data["checks"]:
-        lines.append(markdown_table(pd.DataFrame(data["checks"])[["name", "value", "limit", "passed", "detail"]],
-                                    "%.4g"))
+        lines.append(markdown_table(checks_frame(data["checks"])))
     lines.append(f"\nVariance factor applied to the covariance: {data['variance_factor']:.4g}")
     if data["strongest_correlations"]:
         lines += ["", "## Most correlated parameters", "",

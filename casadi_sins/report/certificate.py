@@ -18,6 +18,7 @@ import pandas as pd
 
 from ..core.text import plural
 from .rounding import parameter_display
+from .tables import checks_frame
 
 #: A4 portrait, the table on as few pages as it fits; colours that survive a black-and-white printer.
 STYLE = """
@@ -87,12 +88,9 @@ def _checks_html(data: dict) -> str:
     checks = data.get("checks") or []
     if not checks:
         return "<p>none</p>"
-    frame = pd.DataFrame(checks)
-    for col in ("value", "limit"):
-        frame[col] = [f"{x:.3g}" if isinstance(x, (int, float)) and math.isfinite(x) else _e(x) for x in frame[col]]
-    frame["passed"] = ["yes" if p else "NO" for p in frame["passed"]]
+    frame = checks_frame(checks)
     marks = {i: "fail-row" for i, p in enumerate(frame["passed"]) if p == "NO"}
-    return _frame_html(frame[["name", "value", "limit", "passed", "detail"]], {"value", "limit"}, marks)
+    return _frame_html(frame, {"value", "limit"}, marks)
 
 
 def certificate_html(data: dict, plots: dict[str, bytes] | None = None) -> str:

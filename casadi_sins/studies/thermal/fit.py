@@ -52,11 +52,13 @@ T_UNIT = 10.0
 
 @dataclasses.dataclass
 class Point:
-    """One calibration of the unit: its temperature (degC), its table with covariance, and a label."""
+    """One calibration of the unit: its temperature (degC), its table with covariance, a label, and where it
+    comes from (``origin``: the SHA-256 of the table and of its recording, the date, the software)."""
 
     temperature_c: float
     params: ParameterSet
     label: str
+    origin: dict | None = None
 
 
 @dataclasses.dataclass

@@ -161,19 +161,23 @@ def cmd_calibrate(args) -> int:
                        + " | ".join(result.warnings))
     verdict = judge(result.parameters, sheet) if sheet else None
     files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
+    table_sha256 = hashlib.sha256(files[Path(args.out)]).hexdigest()
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
-                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
+                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
+                              table_sha256=table_sha256))
     report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
     files.update(export_files(result.parameters, args.out, args.export or (), {
         "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
         "calibrated_with": report["software"],
-        "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
+        "table_sha256": table_sha256, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
         "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items()),
         **conditions_metadata(conditions_dict(rec))}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
-          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {Path(args.report)}/" if args.report else ""))
+          f"({', '.join(p.name for p in companion_paths(args.out))})"
+          + (f", certificate {report['certificate']['number']} ({report['certificate']['file']})"
+             if args.certificate else "") + (f" and {Path(args.report)}/" if args.report else ""))
     for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
         if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"

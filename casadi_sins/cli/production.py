@@ -226,7 +226,8 @@ def add_production_commands(sub) -> None:
                    "from the same recording")
     p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
                    "each unit's verdict in the fleet table and its report")
-    p.add_argument("--certificate", action="store_true", help="also each unit's units/NAME.certificate.html")
+    p.add_argument("--certificate", nargs="?", const="html", choices=("html", "pdf"),
+                   help="also each unit's certificate, units/NAME.certificate.html (or .pdf with 'pdf'; see calibrate)")
     p.set_defaults(func=cmd_batch)
     p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
                 "calibrated but some failed its tolerance sheet")

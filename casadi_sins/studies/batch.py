@@ -43,6 +43,7 @@ from ..data.segmentation import refine
 from ..data.tables import table_text
 from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
+from ..report.certificate import KINDS as CERTIFICATE_KINDS
 from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
@@ -67,7 +68,7 @@ class BatchOptions:
     model: str = "21"
     noise: str | None = None
     tolerance: str | None = None  # a tolerance sheet with acceptance limits: each unit's verdict
-    certificate: bool = False  # each unit's NAME.certificate.html
+    certificate: str | None = None  # each unit's certificate: "html" (NAME.certificate.html) or "pdf"
 
 
 def unit_table_path(out_dir, rec_path) -> Path:
@@ -129,7 +130,8 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}
         files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name,
-                                  verdict=verdict, certificate=options.certificate))
+                                  verdict=verdict, certificate=options.certificate,
+                                  table_sha256=hashlib.sha256(files[table]).hexdigest()))
         report = companion_paths(table)[0]
         data = {**json.loads(files[report]), LEDGER_TABLE_KEY: hashlib.sha256(files[table]).hexdigest()}
         files[report] = (json.dumps(data, indent=2, default=str) + "\n").encode()
@@ -145,7 +147,7 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
 def unit_files(out_dir, rec_path) -> list[Path]:
     """Every file a unit's calibration writes under ``OUT/units/`` (table, report, certificate)."""
     table = unit_table_path(out_dir, rec_path)
-    return [table, *companion_paths(table), certificate_path(table)]
+    return [table, *companion_paths(table), *(certificate_path(table, kind) for kind in CERTIFICATE_KINDS)]
 
 
 def remove_stale(out_dir, rec_path) -> None:

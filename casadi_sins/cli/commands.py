@@ -42,7 +42,7 @@ from ..studies.compare import compare, comparison_display, comparison_files, sum
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
 from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
-from .logs import progress_for, steps_printer
+from .logs import note, progress_for, steps_printer
 
 
 class CliError(Exception):
@@ -120,8 +120,8 @@ def cmd_segment(args) -> int:
         raise CliError(f"{data}: {exc}") from None
     out = Path(args.out)
     atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
-    for note in notes:
-        print(f"note: {note}")
+    for text in notes:
+        note(text)
     print(recording_summary(rec))
     print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
@@ -136,8 +136,9 @@ def cmd_export(args) -> int:
                        f"unit {one_line(origin.unit_id, 60)}")
     metadata = {**origin.metadata(), **({"unit_id": args.unit_id} if args.unit_id else {})}
     atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
-    print(f"wrote {args.out} ({args.format})" + ("" if origin.from_report else
-                                                 "; note: no companion report beside the table, so no recording hash"))
+    print(f"wrote {args.out} ({args.format})")
+    if not origin.from_report:
+        note("no companion report beside the table, so no recording hash")
     return 0
 
 
@@ -174,18 +175,17 @@ def cmd_calibrate(args) -> int:
         **conditions_metadata(conditions_dict(rec))}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
-    print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
-          f"({', '.join(p.name for p in companion_paths(args.out))})"
+    print(f"wrote {args.out} and its report ({', '.join(p.name for p in companion_paths(args.out))})"
           + (f", certificate {report['certificate']['number']} ({report['certificate']['file']})"
-             if args.certificate else "") + (f" and {Path(args.report)}/" if args.report else ""))
+             if args.certificate else "") + (f" and {Path(args.report)}/" if args.report else "")
+          + f"; {args.solver} solver, {result.nit} iterations, {result.wall_time:.2f} s")
     for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
         if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"
             seen = ("the static data's misfit taken for model mismatch" if wander.mismatch
                     else "no significant wander in the static data")
-            print(f"note: bias instability is not modelled for the {SENSOR_WORDS[sensor][0]} "
-                  f"(no --noise datasheet, {seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas "
-                  "exclude it")
+            note(f"bias instability is not modelled for the {SENSOR_WORDS[sensor][0]} (no --noise datasheet, "
+                 f"{seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
     return _verdict_status(verdict)

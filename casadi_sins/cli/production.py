@@ -27,7 +27,7 @@ from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
-from .logs import progress_for
+from .logs import note, progress_for
 from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
 
 
@@ -40,8 +40,8 @@ def cmd_apply(args) -> int:
     write_files(apply_files(applied, args.out, str(table), origin.table_sha256))
     if not applied.check.empty:
         print(check_display(applied.check).to_string(index=False))
-    for note in applied.notes:
-        print(f"note: {note}")
+    for text in applied.notes:
+        note(text)
     worst = applied.worst()
     print(f"worst static segment: gravity {worst.get('gravity_error_ug', float('nan')):.3g} ug, Earth rate "
           f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean in the check table)")
@@ -55,8 +55,8 @@ def cmd_history(args) -> int:
     cals, notes = load_history(args.tables)
     files, summary = history_files(cals, args.out, sheet, notes)
     write_files(files)
-    for note in notes:
-        print(f"note: {note}")
+    for text in notes:
+        note(text)
     shown = summary.copy()
     shown["change"] = [format_with_sigma(c, s, signed=True) for c, s in zip(shown["change_first_to_last"],
                                                                            shown["combined_sigma"])]

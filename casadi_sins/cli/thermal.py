@@ -17,6 +17,7 @@ from ..report.provenance import thermal_provenance
 from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Applied, apply_table
 from .commands import CliError, cmd_export, cmd_simulate
+from .logs import note, warning
 
 
 def add_thermal_command(sub) -> None:
@@ -65,9 +66,9 @@ def cmd_thermal(args: argparse.Namespace) -> int:
               f"+- {format_sigma(sig[i, 1]):7s} {format_with_sigma(coef[i, 2], sig[i, 2], signed=True):>12s} "
               f"+- {format_sigma(sig[i, 2]):7s} {model.orders[i]}")
     for text in fit.warnings:
-        print(f"warning: {text}")
+        warning(text)
     for text in notes:
-        print(f"note: {text}")
+        note(text)
     written = ["thermal.csv", "thermal.json", "thermal.md"] + [at_name(t) for t in args.at]
     print(f"wrote {args.out}/{{{','.join(written)}}}" + ("" if args.no_plots else " and plots"))
     return 0

@@ -122,7 +122,7 @@ def test_command_writes_tables_every_command_reads(tmp_path, capsys):
     paths, truth = _tables(tmp_path, np.random.default_rng(5))
     out = tmp_path / "out"
     assert main(["thermal", *paths, "--at", "10", "-45", "--out", str(out), "--no-plots"]) == 0
-    assert "extrapolated" in capsys.readouterr().out
+    assert "extrapolated" in capsys.readouterr().err  # a warning: on standard error
     at = read_table(out / "at-10C.csv")
     report = json.loads((out / "at-10C.report.json").read_text())
     np.testing.assert_allclose(np.sqrt(np.diag(report["covariance"])), at.sigma, rtol=1e-12)

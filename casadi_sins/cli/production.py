@@ -20,6 +20,7 @@ from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
 from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
 from ..report.tables import frame_files
+from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
 from ..studies.apply import apply_files, check_display
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
@@ -44,9 +45,18 @@ def cmd_apply(args) -> int:
         note(text)
     worst = applied.worst()
     print(f"worst static segment: gravity {worst.get('gravity_error_ug', float('nan')):.3g} ug, Earth rate "
-          f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean in the check table)")
+          f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean and the table's sigma "
+          "in the check table)")
     print(f"wrote {args.out}/{applied.recording.file_stem}.{{toml,csv}} (increments in rad and m/s) and its check")
-    return 0
+    verdict, reasons = applied.verdict()
+    if verdict is None:
+        return 0
+    z = applied.check[["gravity_z", "earth_rate_z"]].abs().max().max()
+    print(f"verdict: {verdict.upper()}: worst static segment {z:.2g} sigma from gravity and the Earth rate (noise of "
+          f"the mean and the table's sigma), limit {APPLY_Z_LIMIT:g}")
+    for reason in reasons:
+        print(f"  {reason}")
+    return 3 if verdict == "fail" else 0
 
 
 def cmd_history(args) -> int:
@@ -197,6 +207,8 @@ def add_production_commands(sub) -> None:
     p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
                    ".csv/.md")
     p.set_defaults(func=cmd_apply)
+    p.epilog = ("exit status: 0 the check at rest passed (every static segment within 5 sigma of gravity and the "
+                "Earth rate, noise of the mean and the table's sigma combined); 3 some segment beyond; 2 bad input")
 
     p = sub.add_parser("history", help="one unit's calibrations by date: change per parameter against the combined "
                        "sigma (z), drift per year, pass/fail against a tolerance sheet, a plot per group")

@@ -9,13 +9,12 @@ from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
 from ..core.inputs import first_line
 from ..data.conditions import TEMPERATURE_RANGE_C
-from ..data.tables import read_table
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
 from ..core.text import one_line
 from ..report.provenance import thermal_provenance
 from ..report.rounding import format_sigma, format_with_sigma
-from ..studies.apply import Applied, apply_table
+from ..studies.apply import Applied, apply_table, table_with_covariance
 from .commands import CliError, cmd_export, cmd_simulate
 from .logs import note, warning
 
@@ -102,7 +101,7 @@ def applied_recording(args, table: str, rec) -> Applied:
     from ..data.thermal import read_thermal
     from ..studies.thermal.apply import apply_thermal
     if not args.thermal:
-        return apply_table(rec, read_table(table))
+        return apply_table(rec, table_with_covariance(table))
     model = read_thermal(table)
     temperature, source = args.temperature_c, "--temperature-c"
     if temperature is None and rec.conditions.temperature_c is not None:

@@ -18,7 +18,7 @@ from ...data.recording import Recording
 from ...model.output import compensate
 from ...model.registry import N_PARAMS
 from ...model.thermal import ThermalModel
-from ..apply import Applied, apply_table, static_check
+from ..apply import Applied, apply_table, judged_check, static_check, table_sigma
 
 #: Samples whose temperatures agree to this are compensated with one table, degC.
 RESOLUTION_C = 0.01
@@ -51,7 +51,8 @@ def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | No
     if len(model.names) > N_PARAMS:
         notes.append("the model's extra terms are not applied: only the 21 parameters of eq. 1 compensate sample by "
                      "sample")
-    return Applied(compensated, static_check(compensated), notes)
+    middle = model.at(model.clamped(float(np.mean(temps))))  # the table's sigma at the recording's mean temperature
+    return Applied(compensated, judged_check(static_check(compensated), table_sigma(rec, middle)), notes)
 
 
 def _range_notes(model: ThermalModel, temps: np.ndarray) -> list[str]:

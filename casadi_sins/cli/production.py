@@ -100,14 +100,16 @@ def cmd_batch(args) -> int:
     spread = spread_frame(fleet)
     fleet = with_outliers(fleet, spread)
     write_files(batch_files(fleet, spread, args.out))
-    cols = ["unit_id", "status", *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
-    print(fleet[cols].to_string(index=False))
+    cols = ["unit_id", *(["temperature_c"] if "temperature_c" in fleet else []), "status",
+            *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
+    print(fleet[cols].to_string(index=False, max_colwidth=100))
     failed = int((fleet["status"] == "failed").sum())
     rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
     resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
+    rejudged = int(fleet["rejudged"].fillna(False).astype(bool).sum()) if "rejudged" in fleet else 0
     print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed"
           + (f", {rejected} out of tolerance" if args.tolerance else "") + f", {resumed} already done "
-          f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
+          f"(not recomputed{f'; {rejudged} of them judged again against the sheet' if rejudged else ''}); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
     return 2 if failed else 3 if rejected else 0
 
 

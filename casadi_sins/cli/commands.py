@@ -37,6 +37,7 @@ from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
+from ..studies.apply import table_with_covariance
 from ..studies.budget import problem_budget, write_budget
 from ..studies.compare import compare, comparison_display, comparison_files, summary_display
 from ..studies.demo import run_demo
@@ -269,11 +270,15 @@ def cmd_budget(args) -> int:
     """``budget``: static navigation error by source."""
     problem = load_problem(args.problem)
     if args.params:
-        table = read_table(args.params)
+        table = table_with_covariance(args.params)  # the correlations of its report, when it has one
         if table.sigma is None:
             raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
-        nominal, covariance, names = table.values, np.diag(np.nan_to_num(table.sigma) ** 2), table.names
-        source = f"{args.params} (sigma only: correlations between parameters not known)"
+        if table.covariance is not None:
+            nominal, covariance, names = table.values, table.covariance, table.names
+            source = f"{args.params} (with the correlations of its report)"
+        else:
+            nominal, covariance, names = table.values, np.diag(np.nan_to_num(table.sigma) ** 2), table.names
+            source = f"{args.params} (sigma only: no companion report, correlations between parameters not known)"
     else:
         pred = predict_problem(problem)
         nominal, covariance, names = pred.nominal.values, pred.nominal.covariance, pred.nominal.names

@@ -21,7 +21,7 @@ from ..report.provenance import read_provenance
 from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
 from ..report.tables import frame_files
 from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
-from ..studies.apply import apply_files, check_display
+from ..studies.apply import apply_files, check_display, table_with_covariance
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
@@ -174,9 +174,11 @@ def cmd_budget_any(args) -> int:
     if not args.params:
         raise CliError(f"{args.problem}: a recording's budget needs the unit's table: --params P.csv")
     rec = read_recording(args.problem)
-    params = read_table(args.params)
+    params = table_with_covariance(args.params)  # the correlations of its report, when it has one
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
+    correlations = ("with the correlations of its report" if params.covariance is not None
+                    else "sigma only: no companion report, correlations between parameters not known")
     budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
     # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
     noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
@@ -185,15 +187,15 @@ def cmd_budget_any(args) -> int:
     out = Path(args.out)
     stem = rec.file_stem
     files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter sigma "
-                        "only (no correlations)",
+                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter "
+                        f"uncertainty {correlations}",
                         display=display(table, sigmas=float_columns(table)))
     buffer = io.BytesIO()
     plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
     files[out / f"{stem}-budget.png"] = buffer.getvalue()
     write_files(files)
     print(f"measured white noise: {noise}; "
-          f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
+          f"orientation {orientation}; parameter uncertainty from {args.params} ({correlations})")
     print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
     return 0

@@ -29,7 +29,10 @@ class CalibrationError(RuntimeError):
 class Check:
     """One consistency check of a fit against its noise model.
 
-    ``passed`` is ``low <= value <= limit``; ``low`` is 0 for one-sided checks.
+    ``passed`` is ``low <= value <= limit``; ``low`` is 0 for one-sided checks.  A check of a least
+    amount (``at_least``: the shortest rest) passes when ``value >= limit``: its ``limit`` is that
+    least amount and ``low`` is not used.  :attr:`accepted` states the limit as people read it, the
+    report's limit column.
     """
 
     name: str
@@ -38,10 +41,22 @@ class Check:
     passed: bool
     detail: str
     low: float = 0.0
+    at_least: bool = False
+
+    @property
+    def accepted(self) -> str:
+        """The accepted values as text: ``>= 0.43``, ``<= 1.22``, ``0.777 to 1.22``, ``|x| <= 0.152``."""
+        if self.at_least:
+            return f">= {self.limit:.3g}"
+        if self.low == 0.0:
+            return f"<= {self.limit:.3g}"
+        if self.low == -self.limit:
+            return f"|x| <= {self.limit:.3g}"
+        return f"{self.low:.3g} to {self.limit:.3g}"
 
     def as_dict(self) -> dict:
-        """Plain data, for the report."""
-        return dataclasses.asdict(self)
+        """Plain data, for the report (with :attr:`accepted`)."""
+        return {**dataclasses.asdict(self), "accepted": self.accepted}
 
 
 @dataclasses.dataclass

@@ -37,12 +37,13 @@ from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
 from ..studies import montecarlo as MC
+from ..studies.apply import table_with_covariance
 from ..studies.budget import problem_budget, write_budget
 from ..studies.compare import compare, comparison_display, comparison_files, summary_display
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
 from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
-from .logs import progress_for, steps_printer
+from .logs import note, progress_for, steps_printer
 
 
 class CliError(Exception):
@@ -120,8 +121,8 @@ def cmd_segment(args) -> int:
         raise CliError(f"{data}: {exc}") from None
     out = Path(args.out)
     atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
-    for note in notes:
-        print(f"note: {note}")
+    for text in notes:
+        note(text)
     print(recording_summary(rec))
     print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
@@ -136,8 +137,9 @@ def cmd_export(args) -> int:
                        f"unit {one_line(origin.unit_id, 60)}")
     metadata = {**origin.metadata(), **({"unit_id": args.unit_id} if args.unit_id else {})}
     atomic_write_text(args.out, EXPORTS[args.format][1](params, metadata))
-    print(f"wrote {args.out} ({args.format})" + ("" if origin.from_report else
-                                                 "; note: no companion report beside the table, so no recording hash"))
+    print(f"wrote {args.out} ({args.format})")
+    if not origin.from_report:
+        note("no companion report beside the table, so no recording hash")
     return 0
 
 
@@ -161,27 +163,30 @@ def cmd_calibrate(args) -> int:
                        + " | ".join(result.warnings))
     verdict = judge(result.parameters, sheet) if sheet else None
     files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
+    table_sha256 = hashlib.sha256(files[Path(args.out)]).hexdigest()
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
-                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
+                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
+                              table_sha256=table_sha256))
     report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
     files.update(export_files(result.parameters, args.out, args.export or (), {
         "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
         "calibrated_with": report["software"],
-        "table_sha256": hashlib.sha256(files[Path(args.out)]).hexdigest(), "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
+        "table_sha256": table_sha256, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
         "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items()),
         **conditions_metadata(conditions_dict(rec))}))
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
-    print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
-          f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {Path(args.report)}/" if args.report else ""))
+    print(f"wrote {args.out} and its report ({', '.join(p.name for p in companion_paths(args.out))})"
+          + (f", certificate {report['certificate']['number']} ({report['certificate']['file']})"
+             if args.certificate else "") + (f" and {Path(args.report)}/" if args.report else "")
+          + f"; {args.solver} solver, {result.nit} iterations, {result.wall_time:.2f} s")
     for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
         if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"
             seen = ("the static data's misfit taken for model mismatch" if wander.mismatch
                     else "no significant wander in the static data")
-            print(f"note: bias instability is not modelled for the {SENSOR_WORDS[sensor][0]} "
-                  f"(no --noise datasheet, {seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas "
-                  "exclude it")
+            note(f"bias instability is not modelled for the {SENSOR_WORDS[sensor][0]} (no --noise datasheet, "
+                 f"{seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
     return _verdict_status(verdict)
@@ -265,11 +270,15 @@ def cmd_budget(args) -> int:
     """``budget``: static navigation error by source."""
     problem = load_problem(args.problem)
     if args.params:
-        table = read_table(args.params)
+        table = table_with_covariance(args.params)  # the correlations of its report, when it has one
         if table.sigma is None:
             raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
-        nominal, covariance, names = table.values, np.diag(np.nan_to_num(table.sigma) ** 2), table.names
-        source = f"{args.params} (sigma only: correlations between parameters not known)"
+        if table.covariance is not None:
+            nominal, covariance, names = table.values, table.covariance, table.names
+            source = f"{args.params} (with the correlations of its report)"
+        else:
+            nominal, covariance, names = table.values, np.diag(np.nan_to_num(table.sigma) ** 2), table.names
+            source = f"{args.params} (sigma only: no companion report, correlations between parameters not known)"
     else:
         pred = predict_problem(problem)
         nominal, covariance, names = pred.nominal.values, pred.nominal.covariance, pred.nominal.names

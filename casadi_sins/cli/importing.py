@@ -15,6 +15,7 @@ from ..core.earth import Site
 from ..core.errors import InputError
 from ..data.description import read_description, write_recording
 from ..data.importers import FORMATS, KEYS, import_samples, imported_recording, parse_map
+from .logs import note
 
 
 def add_import_parser(sub) -> None:
@@ -49,8 +50,8 @@ def cmd_import(args) -> int:
     rec, notes = imported_recording(time, pulses, temperature, args.name or out.stem, template, args.rate, site,
                                     label=str(args.src))
     write_recording(rec, out)
-    for note in notes:
-        print(f"note: {note}")
+    for text in notes:
+        note(text)
     print(f"wrote {out} and {out.with_suffix('.csv').name}: {len(rec.time)} samples at {rec.rate_hz:g} Hz, "
           f"{len(rec.segments)} segments")
     return 0

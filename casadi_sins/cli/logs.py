@@ -1,5 +1,10 @@
-"""What the long commands write while they work: ``--quiet`` and ``--no-progress``, and the progress
-(:class:`core.progress.Progress`: a bar on a terminal, a line per 10 % or 10 s in a log)."""
+"""What the commands write while they work: ``--quiet`` and ``--no-progress``, the progress
+(:class:`core.progress.Progress`: a bar on a terminal, a line per 10 % or 10 s in a log), and the
+diagnostics.
+
+One rule for every command: **results on standard output** (tables, verdicts, the files written),
+**diagnostics on standard error** (the solvers' step lines such as ``nlp: ...``, ``note:`` and
+``warning:`` lines, progress), so that ``casadi-sins CMD ... > result.txt`` keeps the results alone."""
 
 from __future__ import annotations
 
@@ -28,8 +33,21 @@ def progress_for(args, total: float, desc: str, unit: str = "step") -> Progress:
 
 
 def steps_printer(args):
-    """``print`` for the library's step messages, or None with ``--quiet`` or ``--no-progress``."""
-    return None if getattr(args, "quiet", False) or getattr(args, "no_progress", False) else print
+    """A printer of the library's step messages (``nlp: ...``) on standard error, or None with ``--quiet`` or
+    ``--no-progress``."""
+    if getattr(args, "quiet", False) or getattr(args, "no_progress", False):
+        return None
+    return lambda message: print(message, file=sys.stderr, flush=True)
+
+
+def note(text: str) -> None:
+    """A ``note:`` line on standard error (a diagnostic: not with the results)."""
+    print(f"note: {text}", file=sys.stderr)
+
+
+def warning(text: str) -> None:
+    """A ``warning:`` line on standard error."""
+    print(f"warning: {text}", file=sys.stderr)
 
 
 def message_printer(args, command: str):

@@ -83,8 +83,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML: its [accept.sigma] and [accept.value] "
                    "limits give the verdict (report JSON \"verdict\"); exit 3 on fail, the table still written, with "
                    "an acceptance column marking the parameters out of their limits")
-    p.add_argument("--certificate", action="store_true", help="also write NAME.certificate.html: one self-contained "
-                   "HTML file printable on A4 (unit id, recording hash, table rounded to sigma, checks, verdict)")
+    p.add_argument("--certificate", nargs="?", const="html", choices=("html", "pdf"),
+                   help="also write the certificate to sign: NAME.certificate.html (one self-contained file "
+                   "printable on A4), or with 'pdf' NAME.certificate.pdf (needs the extra 'pdf'): certificate "
+                   "number, unit id, recording and table hashes, table rounded to sigma with each limit and "
+                   "margin, checks, verdict, approval fields, page X of Y")
     p.add_argument("--min-rest-s", type=float, help="shortest rest a static segment must keep, s (default: from the "
                    "measured noise and rate, stated in the report)")
     p.set_defaults(func=cmd_calibrate)

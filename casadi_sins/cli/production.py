@@ -20,14 +20,15 @@ from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
 from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
 from ..report.tables import frame_files
-from ..studies.apply import apply_files, check_display
+from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
+from ..studies.apply import apply_files, check_display, table_with_covariance
 from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
-from .logs import progress_for
+from .logs import note, progress_for
 from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
 
 
@@ -40,13 +41,22 @@ def cmd_apply(args) -> int:
     write_files(apply_files(applied, args.out, str(table), origin.table_sha256))
     if not applied.check.empty:
         print(check_display(applied.check).to_string(index=False))
-    for note in applied.notes:
-        print(f"note: {note}")
+    for text in applied.notes:
+        note(text)
     worst = applied.worst()
     print(f"worst static segment: gravity {worst.get('gravity_error_ug', float('nan')):.3g} ug, Earth rate "
-          f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean in the check table)")
+          f"{worst.get('earth_rate_error_deg_h', float('nan')):.3g} deg/h (noise of each mean and the table's sigma "
+          "in the check table)")
     print(f"wrote {args.out}/{applied.recording.file_stem}.{{toml,csv}} (increments in rad and m/s) and its check")
-    return 0
+    verdict, reasons = applied.verdict()
+    if verdict is None:
+        return 0
+    z = applied.check[["gravity_z", "earth_rate_z"]].abs().max().max()
+    print(f"verdict: {verdict.upper()}: worst static segment {z:.2g} sigma from gravity and the Earth rate (noise of "
+          f"the mean and the table's sigma), limit {APPLY_Z_LIMIT:g}")
+    for reason in reasons:
+        print(f"  {reason}")
+    return 3 if verdict == "fail" else 0
 
 
 def cmd_history(args) -> int:
@@ -55,8 +65,8 @@ def cmd_history(args) -> int:
     cals, notes = load_history(args.tables)
     files, summary = history_files(cals, args.out, sheet, notes)
     write_files(files)
-    for note in notes:
-        print(f"note: {note}")
+    for text in notes:
+        note(text)
     shown = summary.copy()
     shown["change"] = [format_with_sigma(c, s, signed=True) for c, s in zip(shown["change_first_to_last"],
                                                                            shown["combined_sigma"])]
@@ -90,14 +100,16 @@ def cmd_batch(args) -> int:
     spread = spread_frame(fleet)
     fleet = with_outliers(fleet, spread)
     write_files(batch_files(fleet, spread, args.out))
-    cols = ["unit_id", "status", *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
-    print(fleet[cols].to_string(index=False))
+    cols = ["unit_id", *(["temperature_c"] if "temperature_c" in fleet else []), "status",
+            *(["verdict"] if args.tolerance else []), "warnings", "outliers", "message"]
+    print(fleet[cols].to_string(index=False, max_colwidth=100))
     failed = int((fleet["status"] == "failed").sum())
     rejected = int((fleet["verdict"] == "fail").sum()) if "verdict" in fleet else 0
     resumed = int(fleet["resumed"].fillna(False).astype(bool).sum()) if "resumed" in fleet else 0
+    rejudged = int(fleet["rejudged"].fillna(False).astype(bool).sum()) if "rejudged" in fleet else 0
     print(f"{len(fleet)} units in {time.perf_counter() - t0:.1f} s: {failed} failed"
           + (f", {rejected} out of tolerance" if args.tolerance else "") + f", {resumed} already done "
-          f"(not recomputed); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
+          f"(not recomputed{f'; {rejudged} of them judged again against the sheet' if rejudged else ''}); wrote {args.out}/fleet.{{csv,md}}, fleet-spread.{{csv,md}} and units/")
     return 2 if failed else 3 if rejected else 0
 
 
@@ -162,9 +174,11 @@ def cmd_budget_any(args) -> int:
     if not args.params:
         raise CliError(f"{args.problem}: a recording's budget needs the unit's table: --params P.csv")
     rec = read_recording(args.problem)
-    params = read_table(args.params)
+    params = table_with_covariance(args.params)  # the correlations of its report, when it has one
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
+    correlations = ("with the correlations of its report" if params.covariance is not None
+                    else "sigma only: no companion report, correlations between parameters not known")
     budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
     # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
     noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
@@ -173,15 +187,15 @@ def cmd_budget_any(args) -> int:
     out = Path(args.out)
     stem = rec.file_stem
     files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter sigma "
-                        "only (no correlations)",
+                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter "
+                        f"uncertainty {correlations}",
                         display=display(table, sigmas=float_columns(table)))
     buffer = io.BytesIO()
     plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
     files[out / f"{stem}-budget.png"] = buffer.getvalue()
     write_files(files)
     print(f"measured white noise: {noise}; "
-          f"orientation {orientation}; parameter uncertainty from {args.params} (sigma only)")
+          f"orientation {orientation}; parameter uncertainty from {args.params} ({correlations})")
     print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
     return 0
@@ -197,6 +211,8 @@ def add_production_commands(sub) -> None:
     p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
                    ".csv/.md")
     p.set_defaults(func=cmd_apply)
+    p.epilog = ("exit status: 0 the check at rest passed (every static segment within 5 sigma of gravity and the "
+                "Earth rate, noise of the mean and the table's sigma combined); 3 some segment beyond; 2 bad input")
 
     p = sub.add_parser("history", help="one unit's calibrations by date: change per parameter against the combined "
                        "sigma (z), drift per year, pass/fail against a tolerance sheet, a plot per group")
@@ -226,7 +242,8 @@ def add_production_commands(sub) -> None:
                    "from the same recording")
     p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
                    "each unit's verdict in the fleet table and its report")
-    p.add_argument("--certificate", action="store_true", help="also each unit's units/NAME.certificate.html")
+    p.add_argument("--certificate", nargs="?", const="html", choices=("html", "pdf"),
+                   help="also each unit's certificate, units/NAME.certificate.html (or .pdf with 'pdf'; see calibrate)")
     p.set_defaults(func=cmd_batch)
     p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
                 "calibrated but some failed its tolerance sheet")

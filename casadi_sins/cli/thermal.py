@@ -4,18 +4,19 @@ Parsing and printing only; the work is in :mod:`studies.thermal`."""
 from __future__ import annotations
 
 import argparse
-import json
 
 from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
 from ..core.inputs import first_line
 from ..data.conditions import TEMPERATURE_RANGE_C
-from ..data.tables import read_table
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
+from ..core.text import one_line
+from ..report.provenance import thermal_provenance
 from ..report.rounding import format_sigma, format_with_sigma
-from ..studies.apply import Applied, apply_table
+from ..studies.apply import Applied, apply_table, table_with_covariance
 from .commands import CliError, cmd_export, cmd_simulate
+from .logs import note, warning
 
 
 def add_thermal_command(sub) -> None:
@@ -64,9 +65,9 @@ def cmd_thermal(args: argparse.Namespace) -> int:
               f"+- {format_sigma(sig[i, 1]):7s} {format_with_sigma(coef[i, 2], sig[i, 2], signed=True):>12s} "
               f"+- {format_sigma(sig[i, 2]):7s} {model.orders[i]}")
     for text in fit.warnings:
-        print(f"warning: {text}")
+        warning(text)
     for text in notes:
-        print(f"note: {text}")
+        note(text)
     written = ["thermal.csv", "thermal.json", "thermal.md"] + [at_name(t) for t in args.at]
     print(f"wrote {args.out}/{{{','.join(written)}}}" + ("" if args.no_plots else " and plots"))
     return 0
@@ -100,7 +101,7 @@ def applied_recording(args, table: str, rec) -> Applied:
     from ..data.thermal import read_thermal
     from ..studies.thermal.apply import apply_thermal
     if not args.thermal:
-        return apply_table(rec, read_table(table))
+        return apply_table(rec, table_with_covariance(table))
     model = read_thermal(table)
     temperature, source = args.temperature_c, "--temperature-c"
     if temperature is None and rec.conditions.temperature_c is not None:
@@ -124,7 +125,11 @@ def cmd_export_any(args) -> int:
         raise CliError(f"{args.table}: a thermal model exports as --format c (casadi_sins_compensate_t); for the "
                        f"{args.format} form of one temperature use thermal --at T and export that table")
     model = read_thermal(args.table)
-    metadata = {"unit_id": args.unit_id or _thermal_unit_id(args.table), "thermal_model": str(args.table)}
+    metadata = thermal_provenance(args.table)  # hashes, dates, versions, the calibrations (as every export)
+    if args.unit_id and metadata.get("unit_id") and args.unit_id != metadata["unit_id"]:
+        raise CliError(f"{args.table}: --unit-id {one_line(args.unit_id, 60)} but the thermal model is of unit "
+                       f"{one_line(metadata['unit_id'], 60)}")
+    metadata = {"unit_id": args.unit_id or metadata.get("unit_id"), **metadata}
     try:
         text = c_header_thermal(model, metadata)
     except ValueError as exc:
@@ -140,16 +145,6 @@ def is_thermal_file(path) -> bool:
         return "p_ref" in first_line(path).split(",")
     except (OSError, InputError):
         return False  # read_table names the problem
-
-
-def _thermal_unit_id(path) -> str | None:
-    from ..data.thermal import companion_path
-    try:
-        doc = json.loads(companion_path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    unit = doc.get("unit_id") if isinstance(doc, dict) else None
-    return unit if isinstance(unit, str) else None
 
 
 def cmd_simulate_any(args) -> int:

@@ -22,12 +22,13 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputError
+from ..core.extras import missing_extra
 from .recording import PULSE_COLUMNS, Recording, check_physical_range, check_rate, validate_schedule
 from .samples import check_time
 from .segmentation import segment_recording
 
 FORMATS = ("psins", "mat", "hdf5", "parquet")
-#: The extra to install for each reader (``pip install casadi-sins[EXTRA]``).
+#: The extra to install for each reader (``pip install "casadi-sins[EXTRA]"``, :func:`core.extras.missing_extra`).
 EXTRAS = {"scipy.io": "mat", "h5py": "hdf5", "pyarrow.parquet": "parquet"}
 KEYS = ("time",) + PULSE_COLUMNS + ("gyro", "accel", "temperature")
 
@@ -37,9 +38,7 @@ def _module(name: str):
     try:
         return importlib.import_module(name)
     except ImportError:
-        extra = EXTRAS[name]
-        raise InputError(None, f"reading this format needs {name.split('.')[0]}: pip install "
-                               f"'casadi-sins[{extra}]'") from None
+        raise InputError(None, missing_extra("reading this format", EXTRAS[name], name.split(".")[0])) from None
 
 
 def parse_map(items) -> dict[str, str]:

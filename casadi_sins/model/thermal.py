@@ -91,6 +91,15 @@ class ThermalModel:
             cov = 0.5 * (cov + cov.T)
         return ParameterSet(values, covariance=cov, names=self.names)
 
+    def clamped(self, temperature_c):
+        """``temperature_c`` (a number or an array) held within the calibrated range: the temperature at which the
+        firmware header (:mod:`report.cheader_thermal`) and ``apply --thermal`` evaluate the model."""
+        low, high = self.range_c
+        if not (np.isfinite(low) and np.isfinite(high)):
+            return temperature_c
+        out = np.clip(temperature_c, low, high)
+        return float(out) if np.ndim(out) == 0 else out
+
     def extrapolates(self, temperature_c: float) -> bool:
         """Whether ``temperature_c`` lies outside the calibrated range."""
         low, high = self.range_c

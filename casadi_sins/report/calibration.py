@@ -32,11 +32,11 @@ from ..model.parameters import ParameterSet, truth_errors
 from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..core.text import markdown_text, plural
 from .acceptance import Verdict
-from .certificate import certificate_html
+from .certificate import certificate_html, certificate_number, certificate_pdf
 from .grade import grade_data, grade_markdown
 from .plots import noise_plot, residual_plot
 from .rounding import parameter_display
-from .tables import calibration_tables, markdown_table, natural_noise_frame
+from .tables import calibration_tables, checks_frame, markdown_table, natural_noise_frame
 
 
 def recording_hash(rec) -> str | None:
@@ -188,6 +188,11 @@ def report_markdown(data: dict) -> str:
              f"- recording: {markdown_text(rec['source'] or '(in memory)')}, sha256 `{rec['sha256']}`",
              f"- {rec['samples']} samples at {rec['rate_hz']:g} Hz, {plural(rec['groups'], 'group')}, "
              f"{plural(rec['segments'], 'segment')}; latitude {rec['latitude_deg']:.6g} deg, gravity {rec['gravity_mps2']:.9g} m/s^2"]
+    if data.get("table_sha256"):
+        lines.append(f"- table: {markdown_text(data.get('table') or '')}, sha256 `{data['table_sha256']}`")
+    if data.get("certificate"):
+        lines.append(f"- certificate: {data['certificate']['number']} "
+                     f"({markdown_text(data['certificate']['file'])})")
     if data.get("command"):
         lines.append(f"- command: {markdown_text(data['command'])}")
     lines += _verdict_lines(data)
@@ -227,8 +232,7 @@ def report_markdown(data: dict) -> str:
     lines += _model_lines(data.get("model"))
     lines += ["", "## Checks", ""]
     if data["checks"]:
-        lines.append(markdown_table(pd.DataFrame(data["checks"])[["name", "value", "limit", "passed", "detail"]],
-                                    "%.4g"))
+        lines.append(markdown_table(checks_frame(data["checks"])))
     lines.append(f"\nVariance factor applied to the covariance: {data['variance_factor']:.4g}")
     if data["strongest_correlations"]:
         lines += ["", "## Most correlated parameters", "",
@@ -304,28 +308,43 @@ def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
     return stem.with_name(stem.name + ".report.json"), stem.with_name(stem.name + ".report.md")
 
 
-def certificate_path(table_path: str | Path) -> Path:
-    """``NAME.certificate.html`` beside a parameter table ``NAME.csv``."""
+def certificate_path(table_path: str | Path, kind: str = "html") -> Path:
+    """``NAME.certificate.html`` (or ``.pdf``) beside a parameter table ``NAME.csv``."""
     stem = Path(table_path).with_suffix("")
-    return stem.with_name(stem.name + ".certificate.html")
+    return stem.with_name(f"{stem.name}.certificate.{kind}")
+
+
+def certificate_files(data: dict, table_path: str | Path, kind: str, plots: dict[str, bytes]) -> dict[Path, bytes]:
+    """The certificate of a report (``kind`` ``"html"`` or ``"pdf"``) as ``{path: bytes}``; its number goes into
+    ``data["certificate"]`` (the report JSON written after it names it)."""
+    number = certificate_number(data.get("unit_id"), str(data.get("created")), data.get("table_sha256"))
+    path = certificate_path(table_path, kind)
+    data["certificate"] = {"number": number, "file": path.name}
+    page = certificate_html(data, plots)
+    return {path: certificate_pdf(page) if kind == "pdf" else page.encode()}
 
 
 def report_files(result: CalibrationResult, rec: Recording, table_path: str | Path, report_dir: str | Path | None = None,
                  truth: ParameterSet | None = None, command: str | None = None,
                  unit_id: str | None = None, verdict: Verdict | None = None,
-                 certificate: bool = False) -> dict[Path, bytes]:
+                 certificate: str | bool | None = None, table_sha256: str | None = None) -> dict[Path, bytes]:
     """Every file of a calibration's report, as ``{path: content}`` (written together by the caller); with
-    ``certificate`` also the self-contained HTML certificate ``NAME.certificate.html`` (:mod:`report.certificate`)."""
+    ``certificate`` (``"html"``, ``"pdf"``; True: html) also the certificate ``NAME.certificate.html`` or ``.pdf``
+    (:mod:`report.certificate`).  ``table_sha256``: the SHA-256 of the table as written (in the report, on the
+    certificate and in its number)."""
     data = report_data(result, rec, truth, command, unit_id, verdict)
+    data["table"] = Path(table_path).name
+    data["table_sha256"] = table_sha256
     json_path, md_path = companion_paths(table_path)
-    text = report_markdown(data)
-    files = {json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
-             md_path: text.encode()}
     plots = ({"velocity in the static intervals after calibration": residual_plot(result, rec),
               "Allan deviation of the static data against the noise model": noise_plot(result, rec)}
              if report_dir is not None or certificate else {})
+    files = {}
     if certificate:
-        files[certificate_path(table_path)] = certificate_html(data, plots).encode()
+        files.update(certificate_files(data, table_path, "html" if certificate is True else certificate, plots))
+    text = report_markdown(data)
+    files.update({json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
+                  md_path: text.encode()})
     if report_dir is not None:
         out = Path(report_dir)
         stem = f"{rec.file_stem}-{result.solver}"

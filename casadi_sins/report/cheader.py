@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import textwrap
 
 import numpy as np
 
@@ -50,6 +51,23 @@ def _comment(text: str) -> str:
     return "".join(c if 32 <= ord(c) < 127 else "?" for c in code_comment(text))
 
 
+#: The preprocessor check that a header is compiled as C99 or later (``static inline``), or as C++.
+C99_CHECK = """#if !defined(__cplusplus) && (!defined(__STDC_VERSION__) || __STDC_VERSION__ < 199901L)
+#error "this header needs C99 or later (static inline functions): compile with -std=c99 or newer"
+#endif"""
+#: The width of a comment line of a header.
+COMMENT_WIDTH = 100
+
+
+def comment_lines(text: str) -> list[str]:
+    """``text`` as whole lines of a C block comment (`` * ...``), wrapped at :data:`COMMENT_WIDTH`, nothing cut
+    off (each line made safe by :func:`_comment`)."""
+    clean = "".join(c if 32 <= ord(c) < 127 else "?" for c in str(text).replace("\n", " "))
+    clean = clean.replace("*/", "* /").replace("/*", "/ *")
+    return [f" * {line}" for line in textwrap.wrap(clean, COMMENT_WIDTH - 3, break_long_words=True,
+                                                    subsequent_indent="    ")] or [" *"]
+
+
 def _matrix(name: str, m: np.ndarray) -> str:
     rows = ",\n    ".join("{" + ", ".join(_c_number(x) for x in row) + "}" for row in m)
     return f"static const double {PREFIX}_{name}[3][3] = {{\n    {rows}}};"
@@ -68,6 +86,7 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
     tag = hashlib.sha256(unit.encode("utf-8", "surrogatepass")).hexdigest()[:8].upper()  # SN-1 and SN_1 differ
     guard = f"CASADI_SINS_COMPENSATION_{re.sub(r'[^A-Z0-9]', '_', unit.upper())[:60]}_{tag}_H"
     lines = ["/* Sensor compensation of a strapdown IMU, written by " + build_identity() + ".",
+             " * Needs C99 or later (static inline functions), or C++.",
              " *",
              " * Per sample interval of length dt (s), from the raw pulses dN_g, dN_a of the three gyros and",
              " * three accelerometers (body axes x, y, z):",
@@ -86,7 +105,7 @@ def c_header(params: ParameterSet, metadata: dict | None = None) -> str:
     if left:
         lines += [" *", " * NOT compensated here: the extra terms of this table (" + _comment(", ".join(left))
                   + "); see the JSON export."]
-    lines += [" */", f"#ifndef {guard}", f"#define {guard}", ""]
+    lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", C99_CHECK, ""]
     if left:
         lines += ["#define CASADI_SINS_EXTRAS_NOT_COMPENSATED 1", ""]
     if terms:

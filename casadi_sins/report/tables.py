@@ -141,3 +141,20 @@ def natural_noise_frame(models: dict[str, SensorNoise]) -> pd.DataFrame:
                 row[label] = np.nan if value is None else float(np.atleast_1d(value)[k if axis else 0])
             rows.append(row)
     return pd.DataFrame(rows)
+
+
+def checks_frame(checks: list[dict]) -> pd.DataFrame:
+    """A report's checks as people read them: name, value (3 significant digits), the accepted limit
+    (``>= 0.43``, ``<= 1.22``, ``0.777 to 1.22``: the check's own :attr:`calibrate.result.Check.accepted`),
+    passed (``yes`` / ``NO``) and the detail."""
+    rows = []
+    for c in checks:
+        value = c.get("value")
+        shown = f"{value:.3g}" if isinstance(value, (int, float)) and math.isfinite(value) else str(value)
+        accepted = c.get("accepted")
+        if accepted is None:  # a report written before checks stated their limit
+            low, limit = c.get("low", 0.0), c.get("limit")
+            accepted = f"<= {limit:.3g}" if not low else f"{low:.3g} to {limit:.3g}"
+        rows.append({"name": c.get("name"), "value": shown, "limit": accepted,
+                     "passed": "yes" if c.get("passed") else "NO", "detail": c.get("detail")})
+    return pd.DataFrame(rows, columns=["name", "value", "limit", "passed", "detail"])

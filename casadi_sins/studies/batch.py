@@ -18,11 +18,15 @@ of that spread and the median sigma of one unit, flagged as outliers.
 
 from __future__ import annotations
 
+import base64
 import dataclasses
+import datetime
 import functools
 import hashlib
+import html
 import json
 import math
+import re
 import os
 import shlex
 import types
@@ -40,10 +44,12 @@ from ..core.toml import read_toml
 from ..data.datasheet import read_datasheet
 from ..data.description import read_recording
 from ..data.segmentation import refine
-from ..data.tables import table_text
+from ..data.tables import read_table, table_text
 from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
-from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
+from ..report.certificate import KINDS as CERTIFICATE_KINDS
+from ..report.calibration import (certificate_files, certificate_path, companion_paths, recording_hash, report_files,
+                                  report_markdown)
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
@@ -67,7 +73,7 @@ class BatchOptions:
     model: str = "21"
     noise: str | None = None
     tolerance: str | None = None  # a tolerance sheet with acceptance limits: each unit's verdict
-    certificate: bool = False  # each unit's NAME.certificate.html
+    certificate: str | None = None  # each unit's certificate: "html" (NAME.certificate.html) or "pdf"
 
 
 def unit_table_path(out_dir, rec_path) -> Path:
@@ -101,13 +107,15 @@ def finished(rec_path, out_dir) -> dict | None:
 
 
 def row_from_report(data: dict, rec_path, status: str) -> dict:
-    """The fleet-table row of a unit from its report data."""
+    """The fleet-table row of a unit from its report data; its message gives the reasons of a failed verdict
+    first, then the warnings (every unit out of tolerance says why)."""
     warnings = list(data.get("warnings") or [])
     conditions = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
+    reasons = list((data.get("acceptance") or {}).get("reasons") or []) if data.get("verdict") == "fail" else []
     row = {"unit_id": data.get("unit_id") or conditions.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
            "status": status if not warnings or status != "ok" else "warnings", "warnings": len(warnings),
-           "message": " | ".join(warnings), "wall_time_s": data.get("wall_time_s", math.nan),
-           "verdict": data.get("verdict", "")}
+           "message": " | ".join([*(f"out of tolerance: {r}" for r in reasons), *warnings]),
+           "wall_time_s": data.get("wall_time_s", math.nan), "verdict": data.get("verdict", "")}
     for key, column in (("date", "recorded"), ("temperature_c", "temperature_c"), ("operator", "operator"),
                         ("bench", "bench")):
         if conditions.get(key) is not None:
@@ -129,7 +137,8 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}
         files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name,
-                                  verdict=verdict, certificate=options.certificate))
+                                  verdict=verdict, certificate=options.certificate,
+                                  table_sha256=hashlib.sha256(files[table]).hexdigest()))
         report = companion_paths(table)[0]
         data = {**json.loads(files[report]), LEDGER_TABLE_KEY: hashlib.sha256(files[table]).hexdigest()}
         files[report] = (json.dumps(data, indent=2, default=str) + "\n").encode()
@@ -142,10 +151,51 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
                         "warnings": 0, "message": message, "verdict": ""}, "files": {}}
 
 
+def rejudged_unit(rec_path, out_dir, options: BatchOptions, data: dict) -> dict | None:
+    """A finished unit judged again against this batch's sheet, from its stored table and report (no calibration):
+    ``{"row", "files"}`` as :func:`calibrate_unit` gives, the table's acceptance column, the report's verdict and the
+    certificate written anew; None when a certificate is asked for and the stored one holds no plots to carry
+    over (the unit is then calibrated again)."""
+    table = unit_table_path(out_dir, rec_path)
+    params = read_table(table)
+    sheet = read_acceptance_sheet(options.tolerance) if options.tolerance else None
+    verdict = judge(params, sheet) if sheet else None
+    plots = stored_plots(certificate_path(table)) if options.certificate else {}
+    if plots is None:
+        return None
+    text = table_text(params, acceptance=verdict and verdict.outcome).encode()
+    data = {k: v for k, v in data.items() if k not in ("verdict", "acceptance", "certificate")}
+    if verdict is not None:
+        data.update(verdict=verdict.verdict, acceptance=verdict.as_dict())
+    data[LEDGER_TABLE_KEY] = hashlib.sha256(text).hexdigest()
+    data["judged"] = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                      "note": "judged again against the sheet from the stored table, not calibrated again"}
+    files = {table: text}
+    if options.certificate:
+        files.update(certificate_files(data, table, options.certificate, plots))
+    json_path, md_path = companion_paths(table)
+    files[json_path] = (json.dumps(data, indent=2, default=str) + "\n").encode()
+    files[md_path] = report_markdown(data).encode()
+    return {"row": row_from_report(data, rec_path, "ok"), "files": files}
+
+
+_PLOT = re.compile(r'<img alt="([^"]*)" src="data:image/png;base64,([A-Za-z0-9+/=]+)">')
+
+
+def stored_plots(certificate: Path) -> dict[str, bytes] | None:
+    """The plots of a stored HTML certificate (``{caption: png}``), None when there is none to read."""
+    try:
+        page = certificate.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    found = {html.unescape(caption): base64.b64decode(data) for caption, data in _PLOT.findall(page)}
+    return found or None
+
+
 def unit_files(out_dir, rec_path) -> list[Path]:
     """Every file a unit's calibration writes under ``OUT/units/`` (table, report, certificate)."""
     table = unit_table_path(out_dir, rec_path)
-    return [table, *companion_paths(table), certificate_path(table)]
+    return [table, *companion_paths(table), *(certificate_path(table, kind) for kind in CERTIFICATE_KINDS)]
 
 
 def remove_stale(out_dir, rec_path) -> None:
@@ -206,7 +256,11 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
     pending = []
     for path in paths:
         data = finished(path, out_dir) if resume else None
-        if data is None or not same_sheet(data, options):
+        rejudged = rejudged_unit(path, out_dir, options, data) if data and not same_sheet(data, options) else None
+        if rejudged is not None:  # another sheet: the stored table judged again, not calibrated again
+            write_files(rejudged["files"])
+            rows[path] = {**rejudged["row"], "resumed": True, "rejudged": True}
+        elif data is None or not same_sheet(data, options):
             pending.append(path)
         else:
             rows[path] = {**row_from_report(data, path, "ok"), "resumed": True}

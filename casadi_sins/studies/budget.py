@@ -209,10 +209,12 @@ def plot_budget(budget: Budget, path: str | Path, title: str) -> Path:
     hours = budget.time / 3600
     for axis, name in enumerate(("latitude (north)", "longitude (east)")):
         ax = axes[axis]
-        for source, sig in budget.contributions.items():
-            ax.semilogy(hours, np.maximum(sig[:, axis], 1e-3), lw=1.0, label=source)
-        ax.semilogy(hours, np.maximum(budget.total[:, axis], 1e-3), "k", lw=2.0, label="total")
-        ax.set_title(f"{name} error, 1 sigma")
+        curves, zero = drawn_curves(budget, axis)
+        for source, sig in curves.items():
+            ax.semilogy(hours, sig, lw=2.0 if source == "total" else 1.0, label=source,
+                        **({"color": "k"} if source == "total" else {}))
+        ax.set_title(f"{name} error, 1 sigma" + (f"\n(zero, not drawn: {', '.join(zero)})" if zero else ""),
+                     fontsize=10)
         ax.set_xlabel("time (h)")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("m")
@@ -220,6 +222,19 @@ def plot_budget(budget: Budget, path: str | Path, title: str) -> Path:
     fig.suptitle(title)
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+def drawn_curves(budget: Budget, axis: int) -> tuple[dict[str, np.ndarray], list[str]]:
+    """The curves of one axis of the budget plot: each source's and the total's sigma with zeros masked (a log
+    axis has no place for 0: it is left out, never drawn at a floor), and the sources that are zero throughout."""
+    curves, zero = {}, []
+    for source, sig in [*budget.contributions.items(), ("total", budget.total)]:
+        values = np.asarray(sig[:, axis], dtype=float)
+        if not np.any(values > 0):
+            zero.append(source)
+            continue
+        curves[source] = np.where(values > 0, values, np.nan)
+    return curves, zero
 
 
 def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame:

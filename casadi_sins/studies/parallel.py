@@ -14,6 +14,7 @@ import re
 from typing import Callable, Iterable, Sequence
 
 from ..core.errors import InputError
+from ..core.extras import missing_extra
 from ..core.text import one_line
 from ..core.threads import single_threaded
 
@@ -79,8 +80,8 @@ def _on_dask(task: Callable, items: list, workers: int | None, scheduler: str):
         from dask.distributed import Client, LocalCluster
         from dask.distributed import as_completed as dask_completed
     except ImportError:
-        raise InputError(None, f"--dask {one_line(scheduler, 80)}: dask.distributed is not installed: "
-                         "pip install 'casadi-sins[cluster]'") from None
+        raise InputError(None, missing_extra(f"--dask {one_line(scheduler, 80)}", "cluster",
+                                             "dask.distributed")) from None
     check_scheduler(scheduler)
     with _children_ignore_ctrl_c():
         cluster = (LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,

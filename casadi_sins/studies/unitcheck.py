@@ -103,7 +103,8 @@ def recording_budget(rec: Recording, params: ParameterSet, orientation: str | No
         raise InputError(None, "the table has no sigma column; the budget needs the uncertainty")
     orientation = orientation or longest_static(rec).orientation
     noise = measured_white_noise(rec, params)
-    covariance = np.diag(np.nan_to_num(params.sigma) ** 2)
+    covariance = (params.covariance if params.covariance is not None  # the report's correlations, when read
+                  else np.diag(np.nan_to_num(params.sigma) ** 2))
     budget = error_budget(covariance, params.values, orientation_to_dcm(orientation), rec.site.latitude,
                           rec.site.height, rec.site.g, noise[0], noise[1], rec.rate_hz, duration_s=hours * 3600.0,
                           names=params.names)

@@ -72,7 +72,7 @@ def test_segment_on_the_raw_csv_gives_a_description_that_calibrates(tmp_path, ca
     described = tmp_path / "segmented.toml"
     assert main(["segment", str(FIXTURE / "ferraris.csv.gz"), "--rate", "102.4", "--latitude", "49.6",
                  "--height", "280", "--out", str(described)]) == 0
-    assert "segmented as a session turned by hand" in capsys.readouterr().out
+    assert "segmented as a session turned by hand" in capsys.readouterr().err  # a note: standard error
     out = tmp_path / "segmented.csv"
     assert main(["calibrate", str(described), "--out", str(out)]) == 0
     report = json.loads(out.with_name("segmented.report.json").read_text())

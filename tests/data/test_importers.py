@@ -76,7 +76,8 @@ def test_a_missing_reader_names_its_extra(original, tmp_path, monkeypatch):
     src = tmp_path / "imu.h5"
     src.write_bytes(b"\x89HDF\r\n\x1a\n")
     monkeypatch.setitem(sys.modules, "h5py", None)
-    with pytest.raises(InputError, match=r"pip install 'casadi-sins\[hdf5\]'"):
+    both = r'pip install "casadi-sins\[hdf5\]" \(from a checkout of the source: pip install "\.\[hdf5\]"\)'
+    with pytest.raises(InputError, match=both):
         import_samples("hdf5", src)
 
 

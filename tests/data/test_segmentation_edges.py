@@ -140,7 +140,9 @@ def test_segment_finds_the_schedule_of_every_problem_and_the_command_of_the_pape
     assert main(["segment", str(toml.with_suffix(".csv")), "--rate", "100", "--latitude", "37.5", "--out",
                  str(out)]) == 0
     captured = capsys.readouterr()
-    assert not captured.err and "21 segments in 3 groups" in captured.out
+    # no error: on standard error only its notes (the groups joined without handling), never a failure
+    assert all(line.startswith("note: ") for line in captured.err.splitlines())
+    assert "21 segments in 3 groups" in captured.out
     assert schedule(read_recording(out)) == schedule(read_recording(toml))
 
 
@@ -212,7 +214,7 @@ def test_what_a_turntable_search_refuses_is_segmented_as_handled_by_default(kind
     data = unusable(kind, kang_problem, tmp_path)
     out = tmp_path / "f.toml"
     assert main(["segment", str(data), "--rate", "100", "--latitude", "37.5", "--out", str(out)]) == 0
-    assert "segmented as a session turned by hand" in capsys.readouterr().out
+    assert "segmented as a session turned by hand" in capsys.readouterr().err  # a note: standard error
     rec = read_recording(out)
     assert len(rec.static_segments) >= 10 and all(s.angle_deg in (90.0, 180.0, 270.0, 360.0)
                                                   for s in rec.segments if not s.is_static)

@@ -71,3 +71,28 @@ def test_the_extra_groups_are_applied_sample_by_sample(short_problem):
     sim = simulate(problem, seed=3, noise=False)
     assert apply_table(sim.recording, sim.truth).worst()["earth_rate_error_deg_h"] < 1e-5
     assert apply_table(sim.recording, ParameterSet(sim.truth.core)).worst()["earth_rate_error_deg_h"] > 1e-3
+
+
+def test_apply_gives_a_verdict_with_exit_3_beyond_the_noise(tmp_path, short_problem, capsys):
+    """The right table passes (exit 0, every |z| within 5); a table 10 ppm off in the accelerometer scale factors
+    (10 ug at 1 g against a noise of the mean near 1 ug: the wrong temperature's signature) fails with exit 3 and
+    names the segments, the error and its sigma."""
+    sim = simulate(short_problem, seed=5)
+    rec_path = write_simulation(sim, tmp_path / "rec")
+    result = calibrate(sim.recording)
+    good = write_table(tmp_path / "good.csv", result.parameters)
+    assert main(["apply", str(good), str(rec_path), "--out", str(tmp_path / "g")]) == 0
+    printed = capsys.readouterr().out
+    assert "verdict: PASS" in printed
+    wrong = result.parameters.values.copy()
+    wrong[R.ACCEL_SCALE] *= 1 + 10e-6
+    bad = write_table(tmp_path / "bad.csv", ParameterSet(wrong, sigma=result.parameters.sigma))
+    assert main(["apply", str(bad), str(rec_path), "--out", str(tmp_path / "b")]) == 3
+    printed = capsys.readouterr().out
+    assert "verdict: FAIL" in printed and "gravity error" in printed and "sigma (noise of the mean" in printed
+    applied = apply_table(sim.recording, ParameterSet(wrong, sigma=result.parameters.sigma))
+    verdict, reasons = applied.verdict()
+    assert verdict == "fail" and len(reasons) >= 3
+    assert (applied.check["gravity_table_ug"] > 0).all()  # the table's own sigma is part of what is judged
+    right = apply_table(sim.recording, result.parameters)
+    assert right.verdict() == ("pass", []) and right.check["gravity_z"].abs().max() < 5

@@ -69,3 +69,63 @@ def test_every_unit_failing_is_no_internal_error_and_leaves_no_stale_table(tmp_p
     assert "internal error" not in err
     assert not (out / "units" / "B0.csv").exists() and not (out / "units" / "B0.report.json").exists()
     assert pd.read_csv(out / "fleet.csv")["status"].tolist() == ["failed"]
+
+
+def test_a_changed_sheet_judges_the_stored_tables_again_without_calibrating(line, capsys, monkeypatch):
+    """With another sheet a resumed batch judges every stored table again (no calibration: the calibration is
+    made to fail if called); each unit out of tolerance has a message saying why, in fleet.md and on screen; the
+    certificates follow the new verdict (their plots carried over), their table hash and number anew."""
+    import casadi_sins.studies.batch as B
+
+    root, sigma = line
+    out = root / "rejudge"
+    sheet = root / "loose.toml"
+    sheet.write_text('format = "casadi-sins-tolerance/1"\n[accept.sigma]\ngyro_bias_x = 1.0\n')
+    assert main(["batch", str(root / "recs"), "--out", str(out), "--tolerance", str(sheet), "--certificate",
+                 "--workers", "1", "--quiet"]) == 0
+    first = {k: json.loads((out / "units" / f"U{k}.report.json").read_text()) for k in range(3)}
+
+    def no_calibration(*args, **kwargs):
+        raise AssertionError("a unit was calibrated again")
+
+    monkeypatch.setattr(B, "calibrate", no_calibration)
+    cut = float(sorted(sigma.values())[1]) * 1.000001
+    sheet.write_text(f'format = "casadi-sins-tolerance/1"\n[accept.sigma]\ngyro_bias_x = {cut!r}\n')
+    assert main(["batch", str(root / "recs"), "--out", str(out), "--tolerance", str(sheet), "--certificate",
+                 "--workers", "1", "--quiet"]) == 3
+    printed = capsys.readouterr().out
+    assert "3 of them judged again against the sheet" in printed
+    worst = f"U{max(sigma, key=sigma.get)}"
+    fleet = pd.read_csv(out / "fleet.csv", keep_default_na=False).set_index("unit_id")
+    assert fleet.loc[worst, "verdict"] == "fail" and "gyro_bias_x: sigma" in fleet.loc[worst, "message"]
+    assert all(fleet.loc[u, "message"] for u in fleet.index if fleet.loc[u, "verdict"] == "fail")
+    assert "out of tolerance: gyro_bias_x" in (out / "fleet.md").read_text() and "gyro_bias_x: sigma" in printed
+    report = json.loads((out / "units" / f"{worst}.report.json").read_text())
+    table = out / "units" / f"{worst}.csv"
+    import hashlib
+    assert report["verdict"] == "fail" and report["table_sha256"] == hashlib.sha256(table.read_bytes()).hexdigest()
+    assert report["created"] == first[int(worst[1])]["created"]  # the same calibration, judged again
+    assert report["certificate"]["number"] != first[int(worst[1])]["certificate"]["number"]
+    page = (out / "units" / f"{worst}.certificate.html").read_text()
+    assert "VERDICT: FAIL" in page and page.count("data:image/png;base64,") == 2
+    assert dict(pd.read_csv(table, keep_default_na=False)[["parameter", "acceptance"]].values)["gyro_bias_x"] == "fail"
+
+
+def test_several_setpoints_of_one_unit_show_their_temperature(tmp_path, short_problem, capsys):
+    """One unit at two temperatures: the fleet rows differ by a temperature column, on screen and in fleet.md."""
+    import dataclasses
+
+    from casadi_sins.data.conditions import Conditions
+    from casadi_sins.data.description import recording_files
+    from casadi_sins.core.files import write_files
+
+    for k, t in enumerate((-10.0, 40.0)):
+        rec = simulate(short_problem, seed=40 + k, name=f"SN9-{k}").recording
+        rec = dataclasses.replace(rec, conditions=Conditions(temperature_c=t, unit_id="SN9"))
+        write_files(recording_files(rec, tmp_path / "recs" / f"SN9-{k}.toml"))
+    assert main(["batch", str(tmp_path / "recs"), "--out", str(tmp_path / "out"), "--workers", "1", "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    lines = [line for line in printed.splitlines() if line.strip().startswith("SN9")]
+    assert "temperature_c" in printed and len(lines) == 2 and lines[0] != lines[1]
+    assert "-10" in lines[0] + lines[1] and "40" in lines[0] + lines[1]
+    assert "temperature_c" in (tmp_path / "out" / "fleet.md").read_text()

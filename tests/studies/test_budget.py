@@ -96,3 +96,44 @@ def test_budget_hours_beyond_the_limit_are_one_line(tmp_path, capsys, hours):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "at most 1000" in err
     assert not out.exists()
+
+
+def test_the_plot_draws_no_zero_contribution_at_a_floor(kang_problem):
+    """A source that contributes nothing (here the gyro biases, at zero sigma) is left out of the log plot and
+    named as zero; no curve holds the old 1e-3 m floor; the first instant (0 m) is a gap, not a floor."""
+    pred = predict_problem(kang_problem)
+    cov = np.diag(np.diag(pred.nominal.covariance)).copy()
+    cov[R.GYRO_BIAS, R.GYRO_BIAS] = 0.0
+    budget = B.error_budget(cov, pred.nominal.values, orientation.orientation_to_dcm("ENU"), kang_problem.site.latitude,
+                            0.0, kang_problem.site.g, 50.0, 0.01, 100.0, duration_s=3600.0)
+    for axis in (0, 1):
+        curves, zero = B.drawn_curves(budget, axis)
+        assert "residual gyro bias" in zero and "residual gyro bias" not in curves and "total" in curves
+        for values in curves.values():
+            finite = values[np.isfinite(values)]
+            assert finite.size and np.all(finite > 0) and not np.any(finite == 1e-3)
+
+
+def test_budget_params_takes_the_correlations_of_the_tables_report(tmp_path, short_problem, capsys):
+    """budget --params with a table from calibrate uses the covariance its report holds (the error budget
+    differs from the sigma-only one), and says so; without the report it says the correlations are unknown."""
+    import shutil
+
+    from casadi_sins.cli import main
+    from casadi_sins.sim import write_simulation
+
+    rec = write_simulation(simulate(short_problem, seed=12), tmp_path / "rec")
+    assert main(["calibrate", str(rec), "--out", str(tmp_path / "P.csv"), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["budget", str(rec), "--params", str(tmp_path / "P.csv"), "--out", str(tmp_path / "b1"),
+                 "--no-progress"]) == 0
+    assert "with the correlations of its report" in capsys.readouterr().out
+    shutil.copy(tmp_path / "P.csv", tmp_path / "bare.csv")
+    assert main(["budget", str(rec), "--params", str(tmp_path / "bare.csv"), "--out", str(tmp_path / "b2"),
+                 "--no-progress"]) == 0
+    assert "correlations between parameters not known" in capsys.readouterr().out
+    import pandas as pd
+    stem = rec.stem
+    with_corr = pd.read_csv(tmp_path / "b1" / f"{stem}-budget.csv").set_index("source")
+    sigma_only = pd.read_csv(tmp_path / "b2" / f"{stem}-budget.csv").set_index("source")
+    assert not np.allclose(with_corr.loc["total"].to_numpy(float), sigma_only.loc["total"].to_numpy(float), rtol=1e-3)

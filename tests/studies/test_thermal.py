@@ -122,7 +122,7 @@ def test_command_writes_tables_every_command_reads(tmp_path, capsys):
     paths, truth = _tables(tmp_path, np.random.default_rng(5))
     out = tmp_path / "out"
     assert main(["thermal", *paths, "--at", "10", "-45", "--out", str(out), "--no-plots"]) == 0
-    assert "extrapolated" in capsys.readouterr().out
+    assert "extrapolated" in capsys.readouterr().err  # a warning: on standard error
     at = read_table(out / "at-10C.csv")
     report = json.loads((out / "at-10C.report.json").read_text())
     np.testing.assert_allclose(np.sqrt(np.diag(report["covariance"])), at.sigma, rtol=1e-12)
@@ -140,3 +140,32 @@ def test_command_temperatures_given_or_refused(tmp_path, capsys):
     given = [f"{p}@{t:g}" for p, t in zip(paths, TEMPS)]
     assert main(["thermal", *given, "--out", str(out), "--no-plots"]) == 0
     assert read_thermal(out / "thermal.csv").range_c == (-30.0, 60.0)
+
+
+def test_two_setpoints_no_residual_warning(tmp_path, capsys):
+    """Two temperatures: lines through both points leave no residual to check. No parameter is said to be any
+    number of sigma off the curve (a zero residual variance was divided by: 1e300-sigma warnings), on standard
+    output, standard error or in thermal.md; the one warning says nothing checks the lines."""
+    paths, _ = _tables(tmp_path, np.random.default_rng(8))
+    out = tmp_path / "out"
+    assert main(["thermal", paths[1], paths[3], "--out", str(out), "--no-plots"]) == 0
+    printed = capsys.readouterr()
+    written = (out / "thermal.md").read_text()
+    for text in (printed.out, printed.err, written):
+        assert "sigma off the fitted curve" not in text
+        assert "no residual checks them" in printed.err + written
+    fit = fit_thermal([Point(-10.0, ParameterSet(np.zeros(3), sigma=np.ones(3), names=NAMES[:3]), "a"),
+                       Point(40.0, ParameterSet(np.ones(3), sigma=np.ones(3), names=NAMES[:3]), "b")])
+    assert np.all(np.isnan(fit.standardized)) and not any("sigma off" in w for w in fit.warnings)
+
+
+def test_three_setpoints_order_one_still_checked():
+    """With three temperatures a straight line keeps one residual degree of freedom: a point far off is still
+    named, with a finite sigma count."""
+    rng = np.random.default_rng(9)
+    nominal, size, cov = _unit(rng)
+    pts, _ = _points(rng, nominal, size, cov, size * 0.3, 0.0 * size, temps=(-10.0, 25.0, 60.0))
+    pts[1].params.values[0] += 20 * np.sqrt(cov[0, 0])
+    fit = fit_thermal(pts, order="1")
+    off = [w for w in fit.warnings if NAMES[0] in w and "sigma off" in w]
+    assert off and all(abs(float(w.split(" is ")[1].split()[0])) < 1e6 for w in off)

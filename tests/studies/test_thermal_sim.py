@@ -49,13 +49,14 @@ def test_apply_thermal_at_the_recordings_temperature_is_the_table_at_that_temper
     assert main(["simulate", str(_short_thermal_problem(tmp_path)), "--out", str(sim), "--no-noise"]) == 0
     rec = str(sim / "thermal-kang2013-m30C.toml")
     assert main(["apply", "--thermal", str(sim / "thermal-truth.csv"), rec, "--out", str(tmp_path / "a")]) == 0
-    assert "-30 degC (from the recording's [conditions])" in capsys.readouterr().out
+    assert "-30 degC (from the recording's [conditions])" in capsys.readouterr().err  # a note: standard error
     assert main(["apply", str(sim / "thermal-kang2013-m30C.truth.csv"), rec, "--out", str(tmp_path / "b")]) == 0
     a, b = (read_recording(tmp_path / d / "thermal-kang2013-m30C-compensated.toml") for d in "ab")
     np.testing.assert_allclose(a.accel, b.accel, rtol=1e-13, atol=1e-18)
     np.testing.assert_allclose(a.gyro, b.gyro, rtol=1e-13, atol=1e-18)
     assert main(["apply", "--thermal", str(sim / "thermal-truth.csv"), "--temperature-c", "60", rec,
-                 "--out", str(tmp_path / "c")]) == 0
+                 "--out", str(tmp_path / "c")]) == 3  # the wrong temperature: gravity far beyond the noise, a verdict
+    assert "verdict: FAIL" in capsys.readouterr().out
     c = read_recording(tmp_path / "c" / "thermal-kang2013-m30C-compensated.toml")
     assert not np.allclose(c.accel, a.accel, rtol=1e-9, atol=0)
     assert main(["apply", str(sim / "thermal-kang2013-m30C.truth.csv"), rec, "--out", str(tmp_path / "d"),
@@ -78,7 +79,7 @@ def test_apply_thermal_sample_by_sample_at_the_temperature_column(tmp_path):
     write_files(recording_files(dataclasses.replace(rec, conditions=Conditions(), temperature=ramp),
                                 tmp_path / "ramp.toml"))
     assert main(["apply", "--thermal", str(sim / "thermal-truth.csv"), str(tmp_path / "ramp.toml"),
-                 "--out", str(tmp_path / "a")]) == 0
+                 "--out", str(tmp_path / "a")]) == 3  # the data are of -30 degC, not of the ramp: the check fails
     got = read_recording(tmp_path / "a" / "thermal-kang2013-m30C-compensated.toml")
     model = read_thermal(sim / "thermal-truth.csv")
     for k in (0, len(ramp) // 2, len(ramp) - 1):

@@ -70,9 +70,11 @@ def assess(graph: ResidualGraph, fit: Fit, noise_plan: NoisePlan) -> Assessment:
     if fit.use_rotation_steps:
         ratio = fit.rotation_step_ratio
         out.add(Check("velocity steps across rotations", ratio, STEP_CONSISTENCY_LIMIT, ratio <= STEP_CONSISTENCY_LIMIT,
-                      "mean square of the whitened residuals after rotations over that of the others"),
-                f"the velocity steps across rotations fit {np.sqrt(ratio):.3g} times worse than the static residuals: "
-                "terms outside the model act during the rotations", beyond_model=True)
+                      f"variance ratio {ratio:.3g}: mean square of the whitened residuals after rotations over "
+                      "that of the others"),
+                f"the velocity steps across rotations fit worse than the static residuals (variance ratio "
+                f"{ratio:.3g}, RMS {np.sqrt(ratio):.3g} times): terms outside the model act during the rotations",
+                beyond_model=True)
     steps = fit.gls_steps
     out.add(Check("post-solve steps converged", steps[-1], GLS_LINEAR_STEP, steps[-1] < GLS_LINEAR_STEP,
                   f"generalised least-squares steps after Ipopt: {', '.join(f'{s:.3g}' for s in steps)} sigma "
@@ -107,17 +109,17 @@ def _kind_factors(out: Assessment, graph: ResidualGraph, fit: Fit, noise_plan: N
         free = noise_plan.free_terms()[label]
         limit, low = factor_limit(dof), factor_low(dof) if two_sided else 0.0
         source = _source_of(noise_plan, label, free)
-        detail = (f"{label} residuals {np.sqrt(factor):.3g} times the noise model ({dof:.0f} degrees of freedom; "
-                  f"noise from {source})")
+        detail = (f"variance ratio {factor:.3g}: mean square of the whitened {label} residuals per degree of "
+                  f"freedom ({dof:.0f}), 1 when the noise model is right (noise from {source})")
         check = Check(f"{label} residuals vs noise model", factor, limit, low <= factor <= limit, detail, low)
         if factor > limit:
-            out.add(check, f"the {label} residuals are {np.sqrt(factor):.3g} times larger than the sensor noise "
-                    f"({source}): errors outside the model (model mismatch, base motion, drift); sigma inflated by "
-                    f"{np.sqrt(factor):.3g}", inflate=factor, beyond_model=True)
+            out.add(check, f"the {label} residuals' variance is {factor:.3g} times the sensor noise's ({source}; RMS "
+                    f"{np.sqrt(factor):.3g} times): errors outside the model (model mismatch, base motion, drift); "
+                    f"sigma inflated by {np.sqrt(factor):.3g}", inflate=factor, beyond_model=True)
         else:
-            out.add(check, f"the {label} residuals are {1 / np.sqrt(max(factor, 1e-300)):.3g} times smaller than the "
-                    f"sensor noise ({source}): the noise model is too large (a datasheet above the unit's noise, or a "
-                    "counter's quantization taken for white noise?)")
+            out.add(check, f"the {label} residuals' variance is {factor:.3g} times the sensor noise's ({source}; RMS "
+                    f"{np.sqrt(factor):.3g} times): the noise model is too large (a datasheet above the unit's noise, "
+                    "or a counter's quantization taken for white noise?)")
             if factor < low:
                 out.too_good[label] = factor
 

@@ -3,7 +3,9 @@
 With the recording's ``temperature`` column each sample is compensated with the parameters at its
 temperature (rounded to :data:`RESOLUTION_C`: with coefficients of a few ug or ppm per degC the
 rounding moves a parameter by a few thousandths of its unit, far below any sigma), as the unit's
-firmware does with ``casadi_sins_compensate_t``.  The check at rest is that of :mod:`studies.apply`.
+firmware does with ``casadi_sins_compensate_t``.  As there, a temperature outside the calibrated range is
+held at the nearest end of it (:meth:`model.thermal.ThermalModel.clamped`), with a note.  The check at rest
+is that of :mod:`studies.apply`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from ...data.recording import Recording
 from ...model.output import compensate
 from ...model.registry import N_PARAMS
 from ...model.thermal import ThermalModel
-from ..apply import Applied, apply_table, static_check
+from ..apply import Applied, apply_table, judged_check, static_check, table_sigma
 
 #: Samples whose temperatures agree to this are compensated with one table, degC.
 RESOLUTION_C = 0.01
@@ -31,7 +33,7 @@ def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | No
         Without a temperature and without a temperature column.
     """
     if temperature_c is not None:
-        applied = apply_table(rec, model.at(temperature_c))
+        applied = apply_table(rec, model.at(model.clamped(temperature_c)))
         applied.notes.extend(_range_notes(model, np.array([temperature_c])))
         return applied
     if rec.temperature is None:
@@ -40,6 +42,7 @@ def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | No
     dtheta, dv = np.empty_like(rec.gyro, dtype=float), np.empty_like(rec.accel, dtype=float)
     for t in np.unique(temps):
         rows = temps == t
+        t = model.clamped(t)
         dtheta[rows], dv[rows] = compensate(rec.gyro[rows], rec.accel[rows], model.values_at(t)[:N_PARAMS], rec.dt)
     compensated = dataclasses.replace(rec, name=f"{rec.name}-compensated", gyro=dtheta, accel=dv, source=None,
                                       temperature=None, warnings=list(rec.warnings))
@@ -48,11 +51,14 @@ def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | No
     if len(model.names) > N_PARAMS:
         notes.append("the model's extra terms are not applied: only the 21 parameters of eq. 1 compensate sample by "
                      "sample")
-    return Applied(compensated, static_check(compensated), notes)
+    middle = model.at(model.clamped(float(np.mean(temps))))  # the table's sigma at the recording's mean temperature
+    return Applied(compensated, judged_check(static_check(compensated), table_sigma(rec, middle)), notes)
 
 
 def _range_notes(model: ThermalModel, temps: np.ndarray) -> list[str]:
     low, high = model.range_c
     if temps.min() < low or temps.max() > high:
-        return [f"temperatures beyond the calibrated range {low:g} .. {high:g} degC: the model is extrapolated"]
+        return [f"temperatures beyond the calibrated range {low:g} .. {high:g} degC ({temps.min():.4g} .. "
+                f"{temps.max():.4g} degC): the model is evaluated at the nearest end of the range, as the firmware "
+                "header does (casadi_sins_compensate_t returns 1 there)"]
     return []

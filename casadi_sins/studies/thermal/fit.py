@@ -52,11 +52,13 @@ T_UNIT = 10.0
 
 @dataclasses.dataclass
 class Point:
-    """One calibration of the unit: its temperature (degC), its table with covariance, and a label."""
+    """One calibration of the unit: its temperature (degC), its table with covariance, a label, and where it
+    comes from (``origin``: the SHA-256 of the table and of its recording, the date, the software)."""
 
     temperature_c: float
     params: ParameterSet
     label: str
+    origin: dict | None = None
 
 
 @dataclasses.dataclass
@@ -70,7 +72,8 @@ class ThermalFit:
     residuals : ndarray (m, n)
         ``x_k - p(T_k)`` in natural units (scale factors ppm).
     standardized : ndarray (m, n)
-        The residuals over their own sigma (``C_k - X_k Sigma X_k^T``).
+        The residuals over their own sigma (``C_k - X_k Sigma X_k^T``); NaN where no residual degree of
+        freedom checks the parameter (the curve passes through every calibration).
     chi2 : ndarray (n,)
         Per parameter, the sum of squared residuals over the calibrations' variances.
     dof : ndarray of int (n,)
@@ -197,10 +200,9 @@ def _finish(points, temps, reference_c, fitted, cov, ys, covs, orders, a2_z, mea
     n, m = len(orders), len(points)
     theta, designs = fitted["theta"], fitted["designs"]
     residuals = np.array([y - x @ theta for y, x in zip(ys, designs)])
-    resid_var = np.array([np.diag(c - x @ fitted["cov"] @ x.T) for c, x in zip(covs, designs)])
-    standardized = residuals / np.sqrt(np.clip(resid_var, 1e-300, None))
-    chi2 = np.sum(residuals ** 2 / np.array([np.diag(c) for c in covs]), axis=0)
     dof = m - orders - 1
+    standardized = _standardized(residuals, covs, designs, fitted["cov"], dof)
+    chi2 = np.sum(residuals ** 2 / np.array([np.diag(c) for c in covs]), axis=0)
     ratio = np.where(dof > 0, chi2 / np.maximum(dof, 1), 1.0)
     widened = np.sqrt(np.maximum(ratio, 1.0))
     factor = np.tile(widened, 3)
@@ -214,6 +216,21 @@ def _finish(points, temps, reference_c, fitted, cov, ys, covs, orders, a2_z, mea
                          (float(temps.min()), float(temps.max())))
     warnings = _warnings(points, model, standardized, chi2, dof, len(np.unique(temps)))
     return ThermalFit(model, points, residuals, standardized, chi2, dof, widened, a2_z, warnings)
+
+
+#: A residual whose variance is below this fraction of its calibration's own is no check (the curve passes
+#: through the point: its residual is rounding, not evidence).
+DETERMINED_FRACTION = 1e-9
+
+
+def _standardized(residuals, covs, designs, cov, dof) -> np.ndarray:
+    """Each residual over its own sigma (``C_k - X_k Sigma X_k^T``); NaN where nothing checks it: a parameter
+    without residual degrees of freedom (two temperatures, or a quadratic through three) or a residual variance
+    that vanishes against the calibration's own (the ratio would be rounding over rounding)."""
+    own = np.array([np.diag(c) for c in covs])
+    resid_var = np.array([np.diag(c - x @ cov @ x.T) for c, x in zip(covs, designs)])
+    checked = (resid_var > DETERMINED_FRACTION * own) & (np.asarray(dof) > 0)[None, :]
+    return np.where(checked, residuals / np.sqrt(np.where(checked, resid_var, 1.0)), np.nan)
 
 
 def _warnings(points, model: ThermalModel, standardized, chi2, dof, distinct: int) -> list[str]:

@@ -119,9 +119,17 @@ def load_points(specs: list[str], temperatures: list[float] | None = None
     dropped = sorted({n for p in points for n in p.params.names} - set(names))
     if dropped:
         notes.append(f"parameters not in every table left out: {', '.join(dropped)}")
-    points = [Point(p.temperature_c, _subset(p.params, names), p.label) for p in points]
+    points = [Point(p.temperature_c, _subset(p.params, names), p.label, _origin(origin))
+              for p, origin in zip(points, origins)]
     points.sort(key=lambda p: p.temperature_c)
     return points, notes, next(iter(units), None)
+
+
+def _origin(origin) -> dict:
+    """What the thermal model keeps of a calibration's provenance (:class:`report.provenance.Provenance`)."""
+    return {"table_sha256": origin.table_sha256, "recording_sha256": origin.recording_sha256,
+            "calibrated": origin.date.isoformat(timespec="seconds") if origin.from_report else None,
+            "calibrated_with": origin.software}
 
 
 def _subset(params: ParameterSet, names: list[str]) -> ParameterSet:

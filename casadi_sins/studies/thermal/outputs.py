@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...core.version import build_identity
+from ...core.version import build_identity, software_versions
 from ...data.tables import table_text
 from ...data.thermal import write_thermal
 from ...model.registry import GROUPS, natural_scale_of, natural_unit_of, relative_mask
@@ -141,8 +141,10 @@ def thermal_files(fit: ThermalFit, out: str | Path, ats: list[float], notes: lis
                   plots: bool = True) -> dict[Path, bytes]:
     """``{path: bytes}`` of every output of a thermal fit in the folder ``out``."""
     out = Path(out)
-    extra = {"software": build_identity(), "unit_id": unit_id,
-             "calibrations": [{"table": p.label, "temperature_c": p.temperature_c} for p in fit.points],
+    extra = {"software": build_identity(), "versions": software_versions(),
+             "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), "unit_id": unit_id,
+             "calibrations": [{"table": p.label, "temperature_c": p.temperature_c, **(p.origin or {})}
+                              for p in fit.points],
              "chi2": fit.chi2.tolist(), "dof": fit.dof.tolist(), "sigma_widened_by": fit.widened.tolist(),
              "a2_over_sigma_quadratic_fit": [None if not np.isfinite(z) else float(z) for z in fit.a2_z],
              "warnings": list(fit.warnings), "notes": list(notes)}

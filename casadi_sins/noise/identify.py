@@ -61,8 +61,9 @@ SIGNIFICANT = 2.0
 #: Correlation times beyond this fraction of the record are weakly determined (said so), and an undetected
 #: term is bounded up to it.
 TAU_FRACTION = 0.2
-#: Correlation times tried per decade.
+#: Correlation times tried per decade, and every how many of them an undetected term is bounded.
 TAU_PER_DECADE = 12
+BOUND_STEP = 3
 #: The spectral check: bands of this fraction of a decade, and the largest |z| taken as a fit.
 CHECK_BANDS_PER_DECADE = 3
 CHECK_LIMIT = 5.0
@@ -226,16 +227,22 @@ def _fit_linear(data: _Ordinates, columns: np.ndarray, offset: np.ndarray | floa
 
 
 def nonnegative_least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``argmin |a x - b|`` over ``x >= 0`` for a few columns, exactly: the least squares on every support, the
-    best of those with no negative part (the optimum is one of them)."""
+    """``argmin |a x - b|`` over ``x >= 0`` for a few columns, exactly: the least squares on every support (from the
+    normal equations, the columns being few and scaled), the best of those with no negative part (the optimum is
+    one of them)."""
+    gram, moment, total = a.T @ a, a.T @ b, float(b @ b)
     columns = a.shape[1]
-    best, best_x = math.inf, np.zeros(columns)
+    best, best_x = total, np.zeros(columns)
     for mask in range(1, 2**columns):
         support = [i for i in range(columns) if mask >> i & 1]
-        x_s = np.linalg.lstsq(a[:, support], b, rcond=None)[0]
+        g, c = gram[np.ix_(support, support)], moment[support]
+        try:
+            x_s = np.linalg.solve(g, c)
+        except np.linalg.LinAlgError:
+            continue
         if np.any(x_s < 0):
             continue
-        residual = float(np.sum((a[:, support] @ x_s - b) ** 2))
+        residual = total - float(x_s @ c)  # |a x - b|^2 at the support's least squares
         if residual < best:
             best, best_x = residual, np.zeros(columns)
             best_x[support] = x_s
@@ -259,11 +266,23 @@ def _golden_maximum(f, low: float, high: float, tolerance: float) -> tuple[float
     return (c, fc) if fc >= fd else (d, fd)
 
 
-def _crossing(f, low: float, high: float, relative: float = 1e-5) -> float:
-    """Where an increasing ``f`` crosses zero between ``low`` (below) and ``high`` (above), by bisection."""
+def _crossing(f, low: float, high: float, f_low: float, f_high: float, relative: float = 1e-3) -> float:
+    """Where an increasing ``f`` crosses zero between ``low`` (``f_low < 0``) and ``high`` (``f_high > 0``), by
+    regula falsi with the Illinois step."""
+    side = 0
     while high - low > relative * high:
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if f(middle) < 0 else (low, middle)
+        x = high - f_high * (high - low) / (f_high - f_low)
+        fx = f(x)
+        if fx < 0:
+            low, f_low = x, fx
+            if side == -1:
+                f_high *= 0.5
+            side = -1
+        else:
+            high, f_high = x, fx
+            if side == 1:
+                f_low *= 0.5
+            side = 1
     return 0.5 * (low + high)
 
 
@@ -445,7 +464,7 @@ def _not_detected(data, theta, expected, ratio, profile, reach, grid) -> AxisFit
     cov = _errors(data, None, theta, expected)
     white, quantization = _white_and_quantization(cov, theta)
     bound, at = 0.0, math.nan
-    for tau in grid[grid <= reach]:
+    for tau in grid[grid <= reach][::BOUND_STEP]:
         b = _sigma_upper_bound(data, tau)
         if b > bound:
             bound, at = b, tau
@@ -468,14 +487,16 @@ def _sigma_upper_bound(data: _Ordinates, tau: float) -> float:
     info = _fisher(data, columns, expected)
     spread = math.sqrt(max(_inverse(info)[2, 2], 0.0))
     low = max(theta[2], 0.0)
+    f_low = excess(low)
     high = low + max(spread, 1e-12 * max(np.max(data.power / gm), 1e-300))
     for _ in range(60):
-        if excess(high) > 0:
+        f_high = excess(high)
+        if f_high > 0:
             break
-        low, high = high, 2.0 * high
+        low, f_low, high = high, f_high, 2.0 * high
     else:
         return math.inf
-    return math.sqrt(_crossing(excess, low, high))
+    return math.sqrt(_crossing(excess, low, high, f_low, f_high))
 
 
 @dataclasses.dataclass

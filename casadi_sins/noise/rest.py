@@ -119,3 +119,15 @@ class RestAccumulator:
         return RestRecord(self.rate_hz, self.samples, allan_curve(self.short, self.blocks, dt), [whole, segments],
                           self.windows.sums / self.windows.size + reference, self.windows.size, self.integer.copy(),
                           self._total / max(self.samples, 1) + reference)
+
+
+def rest_record(increments: np.ndarray, rate_hz: float, chunk: int = 1 << 16) -> RestRecord:
+    """The statistics of increments held in memory ``(samples, axes)`` (the Python API's way in; the command
+    streams a file instead, :func:`noise.static_run.read_rest`)."""
+    increments = np.asarray(increments, dtype=float)
+    if increments.ndim == 1:
+        increments = increments[:, None]
+    acc = RestAccumulator(rate_hz, width=increments.shape[1], expected_samples=len(increments))
+    for start in range(0, len(increments), chunk):
+        acc.add(increments[start:start + chunk])
+    return acc.result()

@@ -70,6 +70,13 @@ def find_motion(window_means: np.ndarray, window_s: float, samples_per_window: i
         step = np.abs(jump) / spread
         if step.max() > STEP_SIGMAS:
             k, axis = _first(step > STEP_SIGMAS)
+            run = np.flatnonzero(step[k:, axis] <= STEP_SIGMAS)
+            stop = k + (int(run[0]) if len(run) else len(step) - k)
+            # where in the run: the largest difference of the half-minutes' means (a peak, where the medians' is flat)
+            total = np.concatenate([[0.0], np.cumsum(means[:, axis])])
+            starts = np.arange(k, stop)
+            mean_jump = (total[starts + 2 * span] - total[starts + span]) - (total[starts + span] - total[starts])
+            k = int(starts[np.argmax(np.abs(mean_jump))])
             found.append((k + span, axis, f"{columns[axis]} steps by {jump[k, axis]:+.3g} pulses per sample between "
                                           f"the half-minutes around it ({step[k, axis]:.3g} times their spread)"))
     if not found:

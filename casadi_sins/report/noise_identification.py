@@ -211,7 +211,12 @@ def allan_figure(study, sensor: str) -> bytes:
     high = np.nanmax(ident.band[1, :, first:first + 3] / size)
     if math.isfinite(low) and math.isfinite(high) and low > 0:
         axes[0].set_ylim(low / 2.0, high * 2.0)
-    axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    seen = {}
+    for ax in axes:  # one legend for the three panels, every line once
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            seen.setdefault(text, handle)
+    axes[-1].legend(list(seen.values()), list(seen), fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                    borderaxespad=0.0)
     fig.suptitle(f"{study.run.name}: Allan deviation of the {SENSOR_NAMES[sensor]}"
                  + ("" if study.scale.si else " (in pulses: no scale factors given)"))
     return figure_bytes(fig)

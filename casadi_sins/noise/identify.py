@@ -64,6 +64,10 @@ TAU_FRACTION = 0.2
 #: Correlation times tried per decade, and every how many of them an undetected term is bounded.
 TAU_PER_DECADE = 12
 BOUND_STEP = 3
+#: A counter's axis is fitted where its known quantization's power is below this share of the white noise's,
+#: if at least this many bins remain.
+COUNTER_SHARE = 0.1
+MIN_ORDINATES = 50
 #: The spectral check: bands of this fraction of a decade, and the largest |z| taken as a fit.
 CHECK_BANDS_PER_DECADE = 3
 CHECK_LIMIT = 5.0
@@ -170,14 +174,26 @@ class _Ordinates:
         self.weight = np.concatenate([lvl.weight for lvl in self.levels])
         self.base = np.vstack([spectrum_columns(lvl.omega, lvl.spacing, None, lvl.length) for lvl in self.levels])
         self.frequency = np.concatenate([lvl.frequency_hz for lvl in self.levels])
+        self.keep = np.ones(len(self.power), dtype=bool)
         self._cache: dict[float, np.ndarray] = {}
+
+    def below(self, keep: np.ndarray) -> "_Ordinates":
+        """The same ordinates where ``keep`` holds."""
+        out = object.__new__(_Ordinates)
+        out.__dict__.update(self.__dict__)
+        out.keep = self.keep.copy()
+        out.keep[np.flatnonzero(self.keep)[~keep]] = False
+        for name in ("power", "weight", "base", "frequency"):
+            setattr(out, name, getattr(self, name)[keep])
+        out._cache = {}
+        return out
 
     def gm(self, tau: float) -> np.ndarray:
         """The Gauss-Markov column at correlation time ``tau``."""
         column = self._cache.get(tau)
         if column is None:
             column = np.concatenate([gauss_markov_column(lvl.omega, lvl.spacing, tau, lvl.length)
-                                     for lvl in self.levels])
+                                     for lvl in self.levels])[self.keep]
             if len(self._cache) < 512:
                 self._cache[tau] = column
         return column
@@ -309,7 +325,8 @@ def _root(variance: float, variance_sigma: float) -> tuple[float, float]:
     return value, (variance_sigma / (2.0 * value) if value > 0 else math.inf)
 
 
-def fit_axis(levels: list[Periodogram], axis: int, duration: float, dt: float) -> AxisFit:
+def fit_axis(levels: list[Periodogram], axis: int, duration: float, dt: float, counter_pulse: float | None = None
+             ) -> AxisFit:
     """Identify the noise terms of one axis from its periodograms (module docstring).
 
     Parameters
@@ -322,12 +339,31 @@ def fit_axis(levels: list[Periodogram], axis: int, duration: float, dt: float) -
         The record's length, s.
     dt : float
         The sample interval, s.
+    counter_pulse : float, optional
+        The axis is a counter of pulses of this size (integer pulses, remainder carried): its quantization is
+        known, ``pulse / sqrt(12)``, but its remainder is a sawtooth, not white (physics pitfall 8).  The fit
+        keeps the frequencies where that quantization's power stays below :data:`COUNTER_SHARE` of the white
+        noise's (the remainder's fine structure, whatever it is, is bounded by it there).
     """
     data = _Ordinates(levels, axis)
     if not np.any(data.power > 0):  # no noise at all (constant pulses)
         zero = Estimate(0.0, 0.0, 0.0, 0.0)
         return AxisFit(AxisTerms(0.0), zero, zero, Estimate(0.0, kind="none"), Estimate(math.nan, kind="none"), 0.0,
                        "not detected", 0.0, SpectralCheck(0.0, math.nan, 1.0), np.zeros((0, 2)))
+    if counter_pulse is not None:
+        fit = fit_axis(levels, axis, duration, dt)  # white noise and quantization from every frequency first
+        q2 = counter_pulse**2 / 12.0
+        keep = q2 * data.base[:, 1] <= COUNTER_SHARE * fit.white.value**2 * data.base[:, 0]
+        if keep.sum() >= MIN_ORDINATES:
+            fit = _fit(data.below(keep), duration, dt)
+        known = Estimate(math.sqrt(q2), 0.0, math.sqrt(q2), math.sqrt(q2))
+        return dataclasses.replace(fit, quantization=known,
+                                   terms=dataclasses.replace(fit.terms, quantization=math.sqrt(q2)))
+    return _fit(data, duration, dt)
+
+
+def _fit(data: "_Ordinates", duration: float, dt: float) -> AxisFit:
+    """:func:`fit_axis` on the chosen ordinates."""
     null_theta, null_l, null_s = _fit_linear(data, data.base)
     lo, hi = tau_range(duration, dt)
     grid = np.geomspace(lo, hi, max(3, int(math.ceil(TAU_PER_DECADE * math.log10(hi / lo))) + 1))
@@ -543,13 +579,15 @@ class Identification:
 
 
 def identify(record, axes=None, progress=None) -> Identification:
-    """Identify every axis of a record at rest (:class:`noise.rest.RestRecord`); ``progress(done, total)`` per axis."""
+    """Identify every axis of a record at rest (:class:`noise.rest.RestRecord`, in pulses: an axis of whole
+    pulses is a counter of one pulse, :func:`fit_axis`); ``progress(done, total)`` per axis."""
     from .allan import confidence_interval, estimate_variance
     names = tuple(axes or [f"axis {i}" for i in range(record.allan.avar.shape[1])])
     fits, curve = [], record.allan
     dof = np.zeros_like(curve.avar)
     for i in range(len(names)):
-        fit = fit_axis(record.periodograms, i, record.duration, record.dt)
+        counter = 1.0 if getattr(record, "integer", None) is not None and record.integer[i] else None
+        fit = fit_axis(record.periodograms, i, record.duration, record.dt, counter)
         fits.append(fit)
         for k, (tau, spacing, terms) in enumerate(zip(curve.tau, curve.spacing, curve.terms)):
             expected, variance = estimate_variance(fit.terms, int(round(tau / spacing)), spacing, int(terms))

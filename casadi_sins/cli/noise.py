@@ -45,9 +45,10 @@ def cmd_noise(args) -> int:
           f"scale: {study.scale.source}")
     for axis, (name, fit) in enumerate(zip(ident.axes, ident.fits)):
         units = units_of(study, "gyro" if axis < 3 else "accel")
+        tau = "" if fit.status == "not detected" else f", tau {shown(fit.gm_tau, 1.0)} s"
         print(f"{name:8s} white {shown(fit.white, units.white[0])} {units.white[1]}; quantization "
               f"{shown(fit.quantization, units.quantization[0])} {units.quantization[1]}; Gauss-Markov sigma "
-              f"{shown(fit.gm_sigma, units.rate[0])} {units.rate[1]}, tau {shown(fit.gm_tau, 1.0)} s ({fit.status})")
+              f"{shown(fit.gm_sigma, units.rate[0])} {units.rate[1]}{tau} ({fit.status})")
     notes, warnings = study.messages()
     for text in warnings:
         print(f"warning: {text}", file=sys.stderr)

@@ -47,7 +47,9 @@ import math
 import numpy as np
 
 from .spectrum import Periodogram
-from .terms import AxisTerms, gauss_markov_column, spectrum_columns
+from .terms import AxisTerms
+from .whittle import (Ordinates, crossing, fisher_information, fit_linear, golden_maximum,
+                      inverse_information)
 
 #: Twice the log-likelihood ratio for the Gauss-Markov term (p about 0.001 over the grid of T).
 DETECTION = 13.8
@@ -165,160 +167,6 @@ def tau_range(duration: float, dt: float) -> tuple[float, float]:
     return max(1.0, 20.0 * dt), 10.0 * duration
 
 
-class _Ordinates:
-    """The binned ordinates of one axis over every periodogram, with the expectation's columns."""
-
-    def __init__(self, levels: list[Periodogram], axis: int):
-        self.levels = [lvl for lvl in levels if len(lvl.omega)]
-        self.power = np.concatenate([lvl.power[:, axis] for lvl in self.levels])
-        self.weight = np.concatenate([lvl.weight for lvl in self.levels])
-        self.base = np.vstack([spectrum_columns(lvl.omega, lvl.spacing, None, lvl.length) for lvl in self.levels])
-        self.frequency = np.concatenate([lvl.frequency_hz for lvl in self.levels])
-        self.keep = np.ones(len(self.power), dtype=bool)
-        self._cache: dict[float, np.ndarray] = {}
-
-    def below(self, keep: np.ndarray) -> "_Ordinates":
-        """The same ordinates where ``keep`` holds."""
-        out = object.__new__(_Ordinates)
-        out.__dict__.update(self.__dict__)
-        out.keep = self.keep.copy()
-        out.keep[np.flatnonzero(self.keep)[~keep]] = False
-        for name in ("power", "weight", "base", "frequency"):
-            setattr(out, name, getattr(self, name)[keep])
-        out._cache = {}
-        return out
-
-    def gm(self, tau: float) -> np.ndarray:
-        """The Gauss-Markov column at correlation time ``tau``."""
-        column = self._cache.get(tau)
-        if column is None:
-            column = np.concatenate([gauss_markov_column(lvl.omega, lvl.spacing, tau, lvl.length)
-                                     for lvl in self.levels])[self.keep]
-            if len(self._cache) < 512:
-                self._cache[tau] = column
-        return column
-
-    def columns(self, tau: float | None) -> np.ndarray:
-        return self.base if tau is None else np.column_stack([self.base, self.gm(tau)])
-
-    def loglik(self, expected: np.ndarray) -> float:
-        """Whittle's log-likelihood (constants dropped)."""
-        return float(-np.sum(self.weight * (np.log(expected) + self.power / expected)))
-
-
-def _fit_linear(data: _Ordinates, columns: np.ndarray, offset: np.ndarray | float = 0.0,
-                start: np.ndarray | None = None, iterations: int = 200) -> tuple[np.ndarray, float, np.ndarray]:
-    """Non-negative ``theta`` maximising the likelihood of ``S = offset + columns @ theta`` (Fisher scoring:
-    non-negative least squares weighted by ``K / S^2``, halved while the likelihood falls).
-    Returns ``(theta, log-likelihood, S)``."""
-    floor = 1e-30 * max(float(np.max(data.power)), 1e-300)
-    if start is None:
-        white = np.median(data.power / columns[:, 0])
-        theta = np.zeros(columns.shape[1])
-        theta[0] = white
-        expected = np.maximum(offset + columns @ theta, floor)
-    else:
-        expected = np.maximum(start, floor)
-        theta = None
-    best = -math.inf if theta is None else data.loglik(expected)
-    for _ in range(iterations):
-        root = np.sqrt(data.weight) / expected
-        a = columns * root[:, None]
-        norms = np.sqrt(np.sum(a**2, axis=0))
-        norms[norms == 0] = 1.0
-        proposal = nonnegative_least_squares(a / norms, (data.power - offset) * root) / norms
-        step = 1.0
-        while True:
-            trial = proposal if theta is None else theta + step * (proposal - theta)
-            trial_expected = np.maximum(offset + columns @ trial, floor)
-            value = data.loglik(trial_expected)
-            if value >= best or step < 1e-3:
-                break
-            step *= 0.5
-        gain = value - best
-        theta, expected, best = trial, trial_expected, value
-        if abs(gain) <= 1e-10 * abs(best) + 1e-9:
-            break
-    return theta, best, expected
-
-
-def nonnegative_least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``argmin |a x - b|`` over ``x >= 0`` for a few columns, exactly: the least squares on every support (from the
-    normal equations, the columns being few and scaled), the best of those with no negative part (the optimum is
-    one of them)."""
-    gram, moment, total = a.T @ a, a.T @ b, float(b @ b)
-    columns = a.shape[1]
-    best, best_x = total, np.zeros(columns)
-    for mask in range(1, 2**columns):
-        support = [i for i in range(columns) if mask >> i & 1]
-        g, c = gram[np.ix_(support, support)], moment[support]
-        try:
-            x_s = np.linalg.solve(g, c)
-        except np.linalg.LinAlgError:
-            continue
-        if np.any(x_s < 0):
-            continue
-        residual = total - float(x_s @ c)  # |a x - b|^2 at the support's least squares
-        if residual < best:
-            best, best_x = residual, np.zeros(columns)
-            best_x[support] = x_s
-    return best_x
-
-
-def _golden_maximum(f, low: float, high: float, tolerance: float) -> tuple[float, float]:
-    """The maximum of a unimodal ``f`` on ``[low, high]`` by golden sections: ``(x, f(x))``."""
-    ratio = (math.sqrt(5.0) - 1.0) / 2.0
-    c, d = high - ratio * (high - low), low + ratio * (high - low)
-    fc, fd = f(c), f(d)
-    while high - low > tolerance:
-        if fc >= fd:
-            high, d, fd = d, c, fc
-            c = high - ratio * (high - low)
-            fc = f(c)
-        else:
-            low, c, fc = c, d, fd
-            d = low + ratio * (high - low)
-            fd = f(d)
-    return (c, fc) if fc >= fd else (d, fd)
-
-
-def _crossing(f, low: float, high: float, f_low: float, f_high: float, relative: float = 1e-3) -> float:
-    """Where an increasing ``f`` crosses zero between ``low`` (``f_low < 0``) and ``high`` (``f_high > 0``), by
-    regula falsi with the Illinois step."""
-    side = 0
-    while high - low > relative * high:
-        x = high - f_high * (high - low) / (f_high - f_low)
-        fx = f(x)
-        if fx < 0:
-            low, f_low = x, fx
-            if side == -1:
-                f_high *= 0.5
-            side = -1
-        else:
-            high, f_high = x, fx
-            if side == 1:
-                f_low *= 0.5
-            side = 1
-    return 0.5 * (low + high)
-
-
-def _fisher(data: _Ordinates, derivatives: np.ndarray, expected: np.ndarray) -> np.ndarray:
-    """Fisher information of Whittle's likelihood for the expectation's derivatives ``(M, P)``."""
-    w = data.weight / expected**2
-    return derivatives.T @ (derivatives * w[:, None])
-
-
-def _inverse(info: np.ndarray) -> np.ndarray:
-    """The inverse of an information matrix, scaled for conditioning (inf where singular)."""
-    d = np.sqrt(np.abs(np.diag(info)))
-    d[d == 0] = 1.0
-    try:
-        inv = np.linalg.inv(info / np.outer(d, d)) / np.outer(d, d)
-    except np.linalg.LinAlgError:
-        return np.full_like(info, np.inf)
-    return inv
-
-
 def _root(variance: float, variance_sigma: float) -> tuple[float, float]:
     """A standard deviation and its standard error from a variance's."""
     value = math.sqrt(max(variance, 0.0))
@@ -345,7 +193,7 @@ def fit_axis(levels: list[Periodogram], axis: int, duration: float, dt: float, c
         keeps the frequencies where that quantization's power stays below :data:`COUNTER_SHARE` of the white
         noise's (the remainder's fine structure, whatever it is, is bounded by it there).
     """
-    data = _Ordinates(levels, axis)
+    data = Ordinates(levels, axis)
     if not np.any(data.power > 0):  # no noise at all (constant pulses)
         zero = Estimate(0.0, 0.0, 0.0, 0.0)
         return AxisFit(AxisTerms(0.0), zero, zero, Estimate(0.0, kind="none"), Estimate(math.nan, kind="none"), 0.0,
@@ -362,14 +210,14 @@ def fit_axis(levels: list[Periodogram], axis: int, duration: float, dt: float, c
     return _fit(data, duration, dt)
 
 
-def _fit(data: "_Ordinates", duration: float, dt: float) -> AxisFit:
+def _fit(data: "Ordinates", duration: float, dt: float) -> AxisFit:
     """:func:`fit_axis` on the chosen ordinates."""
-    null_theta, null_l, null_s = _fit_linear(data, data.base)
+    null_theta, null_l, null_s = fit_linear(data, data.base)
     lo, hi = tau_range(duration, dt)
     grid = np.geomspace(lo, hi, max(3, int(math.ceil(TAU_PER_DECADE * math.log10(hi / lo))) + 1))
     values, thetas, starts, start = [], [], [], null_s
     for tau in grid:
-        theta, value, start = _fit_linear(data, data.columns(tau), start=start)
+        theta, value, start = fit_linear(data, data.columns(tau), start=start)
         values.append(value)
         thetas.append(theta)
         starts.append(start)
@@ -387,24 +235,24 @@ def _fit(data: "_Ordinates", duration: float, dt: float) -> AxisFit:
     return _not_detected(data, null_theta, null_s, ratio, profile, reach, grid)
 
 
-def _refine(data: _Ordinates, grid: np.ndarray, k: int, values: np.ndarray, thetas: list, start: np.ndarray):
+def _refine(data: Ordinates, grid: np.ndarray, k: int, values: np.ndarray, thetas: list, start: np.ndarray):
     """The profile's maximum between the grid's neighbours of its best point."""
     left, right = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     if left == right:
         return grid[k], thetas[k], values[k]
 
     def value(log_tau):
-        return _fit_linear(data, data.columns(math.exp(log_tau)), start=start)[1]
+        return fit_linear(data, data.columns(math.exp(log_tau)), start=start)[1]
 
-    log_tau, best = _golden_maximum(value, math.log(left), math.log(right), 1e-3)
+    log_tau, best = golden_maximum(value, math.log(left), math.log(right), 1e-3)
     if best <= values[k]:
         return grid[k], thetas[k], values[k]
     tau = math.exp(log_tau)
-    theta, value, _ = _fit_linear(data, data.columns(tau), start=start)
+    theta, value, _ = fit_linear(data, data.columns(tau), start=start)
     return tau, theta, value
 
 
-def _errors(data: _Ordinates, tau: float | None, theta: np.ndarray, expected: np.ndarray) -> np.ndarray:
+def _errors(data: Ordinates, tau: float | None, theta: np.ndarray, expected: np.ndarray) -> np.ndarray:
     """Covariance of ``(N^2, Q^2[, sigma^2, ln T])`` from the Fisher information at the estimate; a variance at
     zero is kept in (its error then bounds it)."""
     derivatives = data.columns(tau)
@@ -412,7 +260,7 @@ def _errors(data: _Ordinates, tau: float | None, theta: np.ndarray, expected: np
         h = 1e-4
         d_gm = (data.gm(tau * math.exp(h)) - data.gm(tau * math.exp(-h))) / (2.0 * h)
         derivatives = np.column_stack([derivatives, theta[2] * d_gm])
-    return _inverse(_fisher(data, derivatives, expected))
+    return inverse_information(fisher_information(data, derivatives, expected))
 
 
 def _white_and_quantization(cov: np.ndarray, theta: np.ndarray) -> tuple[Estimate, Estimate]:
@@ -447,7 +295,7 @@ def _tau_interval(profile: np.ndarray, tau: float) -> tuple[float | None, float 
     return low, high
 
 
-def _check(data: _Ordinates, expected: np.ndarray) -> SpectralCheck:
+def _check(data: Ordinates, expected: np.ndarray) -> SpectralCheck:
     """The spectral check of the module docstring: per band the weighted mean of ordinate over expectation, a
     gamma variable of shape ``K`` and mean 1 under the model, its tail probability as a normal ``z``."""
     from scipy.special import gammainc, gammaincc, ndtri
@@ -485,7 +333,7 @@ def _beyond_reach(data, tau, theta, ratio, profile, low) -> AxisFit:
     expected = data.columns(tau) @ theta
     cov = _errors(data, None, theta[:2], expected)
     white, quantization = _white_and_quantization(cov, theta)
-    at_low, _, _ = _fit_linear(data, data.columns(low), start=expected)
+    at_low, _, _ = fit_linear(data, data.columns(low), start=expected)
     gm_sigma = Estimate(math.sqrt(max(at_low[2], 0.0)), kind="lower bound")
     gm_tau = Estimate(low, kind="lower bound")
     terms = AxisTerms(white.value, quantization.value if quantization.kind == "fitted" else 0.0,
@@ -509,19 +357,19 @@ def _not_detected(data, theta, expected, ratio, profile, reach, grid) -> AxisFit
                    Estimate(at, kind="none"), ratio, "not detected", 0.0, _check(data, expected), profile)
 
 
-def _sigma_upper_bound(data: _Ordinates, tau: float) -> float:
+def _sigma_upper_bound(data: Ordinates, tau: float) -> float:
     """The largest ``sigma`` at correlation time ``tau`` whose profile likelihood stays within :data:`UPPER_LR` of
     the best."""
     columns = data.columns(tau)
-    theta, best, expected = _fit_linear(data, columns)
+    theta, best, expected = fit_linear(data, columns)
     gm = columns[:, 2]
 
     def excess(variance):
-        _, value, _ = _fit_linear(data, data.base, offset=variance * gm, start=expected)
+        _, value, _ = fit_linear(data, data.base, offset=variance * gm, start=expected)
         return 2.0 * (best - value) - UPPER_LR
 
-    info = _fisher(data, columns, expected)
-    spread = math.sqrt(max(_inverse(info)[2, 2], 0.0))
+    info = fisher_information(data, columns, expected)
+    spread = math.sqrt(max(inverse_information(info)[2, 2], 0.0))
     low = max(theta[2], 0.0)
     f_low = excess(low)
     high = low + max(spread, 1e-12 * max(np.max(data.power / gm), 1e-300))
@@ -532,7 +380,7 @@ def _sigma_upper_bound(data: _Ordinates, tau: float) -> float:
         low, f_low, high = high, f_high, 2.0 * high
     else:
         return math.inf
-    return math.sqrt(_crossing(excess, low, high, f_low, f_high))
+    return math.sqrt(crossing(excess, low, high, f_low, f_high))
 
 
 @dataclasses.dataclass
@@ -586,7 +434,7 @@ def identify(record, axes=None, progress=None) -> Identification:
     fits, curve = [], record.allan
     dof = np.zeros_like(curve.avar)
     for i in range(len(names)):
-        counter = 1.0 if getattr(record, "integer", None) is not None and record.integer[i] else None
+        counter = 1.0 if record.integer[i] else None
         fit = fit_axis(record.periodograms, i, record.duration, record.dt, counter)
         fits.append(fit)
         for k, (tau, spacing, terms) in enumerate(zip(curve.tau, curve.spacing, curve.terms)):

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from casadi_sins.noise.identify import fit_axis, identify, nonnegative_least_squares
+from casadi_sins.noise.identify import fit_axis, identify
 from casadi_sins.noise.rest import rest_record
 
 #: A standard error's multiple within which a fitted term must meet the truth (the cases use fixed seeds).
@@ -115,12 +115,3 @@ def test_identify_in_si_scales_every_amplitude(static_increments):
         assert scaled.gm_sigma.value == pytest.approx(factor * fit.gm_sigma.value)
         assert scaled.terms.gm_tau == fit.terms.gm_tau
     np.testing.assert_allclose(si.allan.adev, pulses.allan.adev * [1e-6, 3e-4])
-
-
-def test_nonnegative_least_squares_is_scipys():
-    from scipy.optimize import nnls
-    rng = np.random.default_rng(0)
-    for _ in range(50):
-        a = rng.standard_normal((30, 3))
-        b = rng.standard_normal(30)
-        np.testing.assert_allclose(nonnegative_least_squares(a, b), nnls(a, b)[0], atol=1e-10)

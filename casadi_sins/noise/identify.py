@@ -3,7 +3,7 @@ axis, with their uncertainties, by the likelihood of the data's periodograms.
 
 Why a likelihood and not a line through the Allan deviation: the overlapping Allan variances at
 neighbouring cluster times share most of their data (at ``tau`` and ``1.26 tau`` they are correlated by
-0.9 and more), and at long ``tau`` each has a few degrees of freedom and a skewed distribution; a weighted
+about 0.9 for white noise), and at long ``tau`` each has a few degrees of freedom and a skewed distribution; a weighted
 fit that takes them as independent counts the same data many times and gives uncertainties several times
 too small, and a fit with their full covariance still treats chi-square variables of three degrees of
 freedom as Gaussian.  The periodogram ordinates at the Fourier frequencies are instead independent, each

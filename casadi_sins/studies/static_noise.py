@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import math
+import threading
 import time
 from pathlib import Path
 
@@ -203,11 +204,24 @@ def run_noise(path: str | Path, rate_hz: float | None = None, segment: int | Non
     started = time.perf_counter()
     scale = scale or scale_from()
     run = static_run(path, rate_hz, segment)
-    record = read_rest(run, progress)
-    result = identify(record, PULSE_COLUMNS, axis_progress)
+    hashes, stop = {}, threading.Event()
+
+    def hash_inputs():  # beside the parsing, on the other core (hashlib lets go of the interpreter)
+        for p in (run.description, run.data):
+            if p is not None:
+                hashes[str(p)] = file_sha256(p, stop.is_set)
+
+    hashing = threading.Thread(target=hash_inputs, daemon=True)
+    hashing.start()
+    try:
+        record = read_rest(run, progress)
+        result = identify(record, PULSE_COLUMNS, axis_progress)
+        hashing.join()
+    finally:
+        stop.set()
     if scale.si:
         result = result.scaled(scale.factors)
-    inputs = {str(p): file_sha256(p) for p in (run.description, run.data) if p is not None}
+    inputs = {str(p): hashes.get(str(p)) or file_sha256(p) for p in (run.description, run.data) if p is not None}
     created = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
     return NoiseStudy(run, result, scale, record.samples, record.integer, inputs, created,
                       time.perf_counter() - started)

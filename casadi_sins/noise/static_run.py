@@ -19,10 +19,12 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+
 from ..core.errors import InputError
 from ..core.inputs import COMPRESSED, COMPRESSION_RATIO
 from ..data.description import read_description
-from ..data.recording import SEGMENT_OVERHANG_S, TIME_TOLERANCE, Segment
+from ..data.recording import PULSE_COLUMNS, SEGMENT_OVERHANG_S, TIME_TOLERANCE, Segment
 from ..data.samples import sample_blocks
 from .rest import RestAccumulator, RestRecord
 from .stillness import find_motion
@@ -148,6 +150,10 @@ def read_rest(run: StaticRun, progress=None) -> RestRecord:
         raise InputError(run.label, f"the rest lasts {record.duration:.6g} s ({record.samples} samples): the noise "
                          f"identification needs at least {MIN_REST_S:g} s at rest (calibrate's raw estimate measures "
                          "the white noise of shorter rests)")
+    still = [PULSE_COLUMNS[i] for i in range(record.allan.avar.shape[1]) if not np.any(record.allan.avar[:, i] > 0)]
+    if still:
+        raise InputError(run.label, f"{', '.join(still)}: every sample the same, no noise to identify (a simulation "
+                         "without noise, or a stuck counter)")
     motion = find_motion(record.window_means, record.window_s, record.window_samples)
     if motion is not None:
         start = (run.segment.start if run.segment else first_time - dt) + motion.start_s

@@ -90,15 +90,20 @@ def noise_json(study) -> str:
            "datasheet": None if sheet is None else {k: (v.tolist() if isinstance(v, np.ndarray) else v)
                                                     for k, v in sheet[0].natural().items() if v is not None},
            "notes": notes, "warnings": warnings, "allan": allan}
-    return json.dumps(doc, indent=1, allow_nan=False, default=_plain) + "\n"
+    return json.dumps(_plain(doc), indent=1, allow_nan=False) + "\n"
 
 
 def _plain(value):
-    if isinstance(value, (np.floating, np.integer)):
+    """JSON values: NumPy numbers and arrays as Python's, a number that is not finite as null."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.integer, np.bool_)):
         return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(type(value).__name__)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
 
 
 def shown(estimate: Estimate, size: float) -> str:

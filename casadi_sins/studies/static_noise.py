@@ -168,9 +168,9 @@ class NoiseStudy:
                              f"rate random walk of {fit.rate_random_walk / units.random_walk[0]:.3g} "
                              f"{units.random_walk[1]}); a record of five times the correlation time determines it")
             elif fit.status == "determined" and fit.gm_tau.value > reach:
+                low = "below the range tried" if fit.gm_tau.low is None else f"{fit.gm_tau.low:.3g}"
                 notes.append(f"{name}: the correlation time {fit.gm_tau.value:.3g} s is longer than a fifth of the "
-                             f"record ({reach:.0f} s): weakly determined (95 % {fit.gm_tau.low:.3g}-"
-                             f"{fit.gm_tau.high:.3g} s)")
+                             f"record ({reach:.0f} s): weakly determined (95 % {low}-{fit.gm_tau.high:.3g} s)")
             elif fit.status == "not detected":
                 notes.append(f"{name}: no Gauss-Markov bias seen; sigma < {fit.gm_sigma.value / size:.3g} {unit} (95 %) "
                              f"for any correlation time up to {reach:.0f} s (a fifth of the record)")

@@ -124,6 +124,7 @@ def test_one_static_segment_of_a_recording_with_motion_elsewhere(tmp_path, pulse
     ("motion", "not at rest at 7"),
     ("gap", "line 3002"),
     ("short", "at least 600 s"),
+    ("flat", "no noise to identify"),
 ])
 def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, pulses, capsys, fault, words):
     data, rows = pulses.copy(), None
@@ -133,6 +134,8 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, pulses, caps
         rows = np.r_[0:3000, 3001:len(pulses)]
     elif fault == "short":
         data = pulses[:5000]
+    elif fault == "flat":
+        data[:, 4] = 7.0  # a stuck counter
     toml, _ = _write(tmp_path, data, rows=rows)
     out = tmp_path / "out"
     assert main(["noise", str(toml), "--params", str(_table(tmp_path)), "--out", str(out), "--no-progress"]) == 2

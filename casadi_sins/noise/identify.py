@@ -385,7 +385,7 @@ def _sigma_upper_bound(data: Ordinates, tau: float) -> float:
 
 @dataclasses.dataclass
 class Identification:
-    """The noise of every axis of a record at rest (data's unit until :meth:`scaled`).
+    """The noise of every axis of a record at rest (in the data's unit until scaled).
 
     Attributes
     ----------

@@ -41,7 +41,7 @@ class RestRecord:
     periodograms : list of Periodogram
         The whole record's (block sums) and, above the blocks' Nyquist frequency, the segments'.
     window_means : ndarray (W, 6)
-        Mean pulses per sample over consecutive windows of :attr:`window_samples` samples.
+        Mean pulses per sample over consecutive windows of ``window_samples`` samples.
     window_samples : int
     integer : ndarray (6,) of bool
         Whether every pulse of the axis was a whole number (a counter).
@@ -75,7 +75,7 @@ class RestRecord:
 
 
 class RestAccumulator:
-    """The single pass of the module docstring; :meth:`add` chunks of pulses, then :meth:`result`."""
+    """The single pass of the module docstring: ``add`` chunks of pulses, then ``result()``."""
 
     def __init__(self, rate_hz: float, width: int = 6, max_blocks: int = MAX_BLOCKS, expected_samples: int = 0):
         self.rate_hz = float(rate_hz)

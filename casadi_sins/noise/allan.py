@@ -91,10 +91,11 @@ class StreamingAllan:
             self._level_add(level, x)
 
     def _level_add(self, level: int, x: np.ndarray) -> None:
-        tail = self._tails[level]
-        angle = np.concatenate([tail, tail[-1] + np.cumsum(x, axis=0)])
-        angle -= angle[-1]  # second differences ignore a constant; the numbers stay small
+        tail = self._tails[level]  # the last boundaries, the last at 0 (second differences ignore a constant)
         new = len(tail)
+        angle = np.empty((new + len(x), x.shape[1]))
+        angle[:new] = tail
+        np.cumsum(x, axis=0, out=angle[new:])
         end = len(angle)
         for i, j in enumerate(self._spans[level]):
             first = max(new, 2 * j)  # index of the last point of the first new term
@@ -105,7 +106,7 @@ class StreamingAllan:
             d += angle[first - 2 * j:end - 2 * j]
             self._sums[level][i] += np.einsum("ij,ij->j", d, d)
             self._counts[level][i] += len(d)
-        self._tails[level] = angle[-7:]
+        self._tails[level] = angle[-7:] - angle[-1]
 
     def result(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(tau (K,), avar (K, width), terms (K,), spacing (K,))`` of the cluster times with at least one term."""

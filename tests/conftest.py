@@ -10,6 +10,7 @@ import dataclasses
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from casadi_sins.calibrate import calibrate_ils, calibrate_nlp
@@ -74,3 +75,31 @@ def peer_recording():
 def peer_truth():
     """Its truth: the 21-parameter part of the generator's errors."""
     return read_table(PEER / "psins-19pos.truth.csv")
+
+
+def _static_increments(rate_hz, seconds, white, quantization=0.0, sigma=0.0, tau=600.0, seed=0, mean=0.0):
+    """Increments of axes at rest, written independently of the package (NumPy and scipy.signal only): white rate
+    noise of density ``white`` (unit/sqrt(s)), quantization ``quantization`` of the accumulated angle (each
+    increment ``e_k - e_(k-1)``), a first-order Gauss-Markov rate (steady-state ``sigma``, correlation time
+    ``tau``; an AR(1) per sample, held over the sample) and a constant rate ``mean``.  Per-axis arrays broadcast;
+    returns ``(samples, axes)``."""
+    from scipy.signal import lfilter
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / rate_hz
+    n = int(round(seconds * rate_hz))
+    white, quantization, sigma, tau, mean = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
+                                                                  for v in (white, quantization, sigma, tau, mean)))
+    out = np.empty((n, len(white)))
+    for k in range(len(white)):
+        a = np.exp(-dt / tau[k])
+        drive = rng.standard_normal(n) * sigma[k] * np.sqrt(1.0 - a * a)
+        bias = lfilter([1.0], [1.0, -a], drive, zi=[a * sigma[k] * rng.standard_normal()])[0]
+        remainder = rng.standard_normal(n + 1) * quantization[k]
+        out[:, k] = (mean[k] + bias) * dt + white[k] * np.sqrt(dt) * rng.standard_normal(n) + np.diff(remainder)
+    return out
+
+
+@pytest.fixture(scope="session")
+def static_increments():
+    """The independent generator of a recording at rest (:func:`_static_increments`)."""
+    return _static_increments

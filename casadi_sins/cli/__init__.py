@@ -27,7 +27,7 @@ from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
 FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
-                  "modulate-mc", "apply", "history", "batch", "thermal", "design-scheme", "design"}
+                  "modulate-mc", "apply", "history", "batch", "thermal", "design-scheme", "design", "noise"}
 #: Commands that write as they go by design (a resumable ledger); every other one writes all at the end.
 INCREMENTAL_OUTPUTS = {"batch"}
 

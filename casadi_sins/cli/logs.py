@@ -14,7 +14,7 @@ from ..core.progress import Progress, progress_mode
 
 #: The commands that take long enough to report progress.
 LONG_COMMANDS = ("simulate", "calibrate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo",
-                 "modulate", "modulate-mc", "batch", "design", "design-scheme")
+                 "modulate", "modulate-mc", "batch", "design", "design-scheme", "noise")
 
 
 def add_log_options(p) -> None:

@@ -15,6 +15,7 @@ from .importing import add_import_parser
 from .production import add_production_commands, cmd_budget_any, cmd_navcheck_any
 from .thermal import add_thermal_command, cmd_export_any, cmd_simulate_any
 from .scheme_design import add_design_command
+from .noise import add_noise_command
 
 
 class _PrintVersion(argparse.Action):
@@ -182,6 +183,7 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     add_import_parser(sub)
     add_design_command(sub)
     add_schedule_design_command(sub)
+    add_noise_command(sub)
     for name in LONG_COMMANDS:
         add_log_options(sub.choices[name])
     for action in sub._choices_actions:  # each command's --help starts with its one-line description

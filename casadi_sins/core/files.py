@@ -214,10 +214,12 @@ def write_files(files: dict) -> list[Path]:
     return [path for _, path in staged]
 
 
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 of a file's bytes."""
+def file_sha256(path: str | Path, cancelled=None) -> str | None:
+    """SHA-256 of a file's bytes (None when ``cancelled()`` turns true on the way: a hash in the background)."""
     digest = hashlib.sha256()
     with open(path, "rb") as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
+            if cancelled is not None and cancelled():
+                return None
             digest.update(block)
     return digest.hexdigest()

@@ -8,6 +8,10 @@
     gyro_bias_tau_s = 600               # ... and its correlation time
 
 Any subset of :data:`model.noise.NOISE_KEYS`; the terms not given are estimated from the data.
+``*_bias_instability_*`` is the steady-state 1 sigma of a first-order Gauss-Markov bias, one value per
+sensor: not the Allan deviation's floor (a Gauss-Markov bias's Allan deviation peaks at 0.617 sigma at
+1.89 times its correlation time; a vendor's "bias instability" is often that floor over 0.664).
+:func:`datasheet_toml` writes one (``casadi-sins noise``).
 """
 
 from __future__ import annotations
@@ -15,9 +19,23 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..core.errors import InputError, shown
 from ..core.toml import read_toml
 from ..model.noise import NOISE_KEYS, SensorNoise
+
+#: What each key is, for the comments of a written datasheet.
+KEY_NOTES = {
+    "gyro_arw_deg_rth": "angle random walk (white rate noise density), deg/sqrt(h), x y z",
+    "accel_vrw_ug_rthz": "velocity random walk (white specific-force noise density), ug/sqrt(Hz), x y z",
+    "gyro_quantization_arcsec": "angle quantization (white noise of the accumulated angle), arcsec, x y z",
+    "accel_quantization_mm_s": "velocity quantization (white noise of the accumulated velocity), mm/s, x y z",
+    "gyro_bias_instability_deg_h": "Gauss-Markov bias: steady-state 1 sigma, deg/h (not the Allan floor)",
+    "gyro_bias_tau_s": "its correlation time, s",
+    "accel_bias_instability_ug": "Gauss-Markov bias: steady-state 1 sigma, ug (not the Allan floor)",
+    "accel_bias_tau_s": "its correlation time, s",
+}
 
 
 def read_datasheet(path: str | Path) -> SensorNoise:
@@ -44,3 +62,23 @@ def read_datasheet(path: str | Path) -> SensorNoise:
             raise InputError(path, f"{key} must be a non-negative number (or 3 for the white and quantization "
                              f"terms), found {shown(value)}")
     return SensorNoise.from_natural(doc)
+
+
+def datasheet_toml(noise: SensorNoise, comments=()) -> str:
+    """A datasheet :func:`read_datasheet` reads back: the terms of ``noise`` that are known (a bias's
+    correlation time only with its instability), six significant digits, each key with what it is, the
+    ``comments`` first."""
+    natural = noise.natural()
+    lines = [f"# {line}" for text in comments for line in str(text).splitlines()]
+    lines += ["# *_bias_instability_* is a first-order Gauss-Markov bias's steady-state 1 sigma, one per sensor",
+              "# (its Allan deviation peaks at 0.617 sigma at 1.89 tau); the other terms are per axis x, y, z", ""]
+    for key in NOISE_KEYS:
+        value = natural[key]
+        sensor = key.split("_")[0]
+        if value is None or (key.endswith("_tau_s") and getattr(noise, f"{sensor}_bias_instability") is None):
+            continue
+        values = np.atleast_1d(np.asarray(value, dtype=float))
+        text = (f"{float(values[0]):.6g}" if values.size == 1 or "bias" in key
+                else "[" + ", ".join(f"{float(v):.6g}" for v in values) + "]")
+        lines.append(f"{key} = {text}   # {KEY_NOTES[key]}")
+    return "\n".join(lines) + "\n"

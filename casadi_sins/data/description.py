@@ -72,9 +72,10 @@ def read_recording(path: str | Path) -> Recording:
     return rec
 
 
-def read_description(path: str | Path) -> dict:
+def read_description(path: str | Path, require_segments: bool = True) -> dict:
     """The description alone (no samples): ``name``, ``data``, ``site``, ``rate_hz``, ``segments``,
-    ``conditions`` and ``warnings``; each problem an :class:`InputError` naming the file and line."""
+    ``conditions`` and ``warnings``; each problem an :class:`InputError` naming the file and line.
+    Without ``require_segments`` a description with no ``[[segments]]`` has none (``noise``: all at rest)."""
     path = Path(path)
     doc, text = read_toml_text(path, "recording description")
     if doc.get("format") != FORMAT:
@@ -93,7 +94,8 @@ def read_description(path: str | Path) -> dict:
     rate_hz = _number(imu.get("rate_hz"), path, "[imu] rate_hz")
     if not 1.0 <= rate_hz <= 1e5:
         raise InputError(path, f"[imu] rate_hz must be between 1 and 100000 Hz, found {rate_hz:g}")
-    segments = _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments"))
+    segments = ([] if not require_segments and "segments" not in doc
+                else _parse_segments(doc.get("segments"), path, array_table_lines(text, "segments")))
     conditions, notes = parse_conditions(doc.get("conditions"), path)
     return {"name": name, "data": data_name, "site": site, "rate_hz": rate_hz, "segments": segments,
             "conditions": conditions, "warnings": notes}

@@ -6,6 +6,7 @@ pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
 import io
@@ -34,6 +35,8 @@ BLOCK_BYTES = 8 << 20
 MAX_LINE_BYTES = 1 << 20
 #: No pulse count or increment is larger: beyond 2**53 a float cannot even count pulses exactly.
 MAX_PULSE = 2.0**53
+#: How a missing or unreadable CSV is named.
+DATA_FILE = "data file (the CSV of samples that 'data' must name)"
 
 
 def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False) -> tuple:
@@ -53,12 +56,46 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     InputError
         Naming the file, line and column of the first problem.
     """
-    size = check_input_file(data_path, "data file (the CSV of samples that 'data' must name)")
+    size = check_input_file(data_path, DATA_FILE)
     check_memory_for(data_path, size)
-    try:
+    with _read_errors(data_path):
         columns = _header(data_path)
         wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
         values = _stream(data_path, columns, 1.0 / rate_hz, wanted)
+    if len(values) < 2:
+        raise InputError(data_path, "fewer than two samples")
+    time, pulses = values[:, 0], values[:, 1:len(COLUMNS)]
+    if not with_temperature:
+        return time, pulses
+    return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
+
+
+def sample_blocks(data_path: Path, rate_hz: float):
+    """Time and pulses of the CSV block by block, for a file too long to hold (``noise`` on hours of rest).
+
+    Yields ``(time (n,), pulses (n, 6), text_bytes)`` per block of about :data:`BLOCK_BYTES` of text, each
+    checked as :func:`read_samples` checks it (fields, numbers, pulses, uniform time, from one block to the
+    next) before it is given out; ``text_bytes`` is the block's size as text, for progress.  Memory is one
+    block whatever the file's length.
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and column of the first problem (when the block holding it is reached).
+    """
+    data_path = Path(data_path)
+    check_input_file(data_path, DATA_FILE)
+    with _read_errors(data_path):
+        columns = _header(data_path)
+        for _, values, text_bytes in _checked_blocks(data_path, columns, 1.0 / rate_hz):
+            yield values[:, 0], values[:, 1:len(COLUMNS)], text_bytes
+
+
+@contextlib.contextmanager
+def _read_errors(data_path: Path):
+    """What goes wrong while reading the CSV, as an :class:`InputError` naming it."""
+    try:
+        yield
     except InputError:
         raise
     except MemoryError:
@@ -68,12 +105,6 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
-    if len(values) < 2:
-        raise InputError(data_path, "fewer than two samples")
-    time, pulses = values[:, 0], values[:, 1:len(COLUMNS)]
-    if not with_temperature:
-        return time, pulses
-    return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
 
 
 def _header(data_path: Path) -> list[str]:
@@ -116,16 +147,24 @@ def _blocks(data_path: Path):
 def _stream(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS) -> np.ndarray:
     """Every row's ``wanted`` columns, block by block, each block checked before the next is read."""
     parts: list[np.ndarray] = []
-    held, budget, last = 0, memory_available(), None
-    for line, block in _blocks(data_path):
-        values = _block_values(data_path, columns, line, block, wanted)
-        last = _check_block(data_path, values, line, block, dt, last)
+    held, budget = 0, memory_available()
+    for line, values, _ in _checked_blocks(data_path, columns, dt, wanted):
         parts.append(values)
         held += values.nbytes
         if 2 * held + BLOCK_BYTES > budget:
             raise InputError(data_path, f"more rows than fit in memory ({held / 1e9:.3g} GB read before line "
                              f"{line}, {budget / 1e9:.3g} GB available; a compression bomb?)")
     return np.concatenate(parts) if parts else np.zeros((0, len(wanted)))
+
+
+def _checked_blocks(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS):
+    """``(first line, values of the wanted columns, bytes of text)`` per block, each checked before the next is
+    read."""
+    last = None
+    for line, block in _blocks(data_path):
+        values = _block_values(data_path, columns, line, block, wanted)
+        last = _check_block(data_path, values, line, block, dt, last)
+        yield line, values, len(block)
 
 
 def _block_values(data_path: Path, columns: list[str], line: int, block: bytes, wanted=COLUMNS) -> np.ndarray:

@@ -32,6 +32,7 @@ On a swaying base the method refuses: the coarse alignment assumes a still one.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Callable
 
@@ -47,9 +48,11 @@ from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
 from ..limits import factor_limit, factor_low, separation_warnings
 from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
-from ..wander import describe, record, with_wander
+from ..wander import bias_cost, describe, record, unknown_sensors, wander_tau, with_wander
 from .covariance import equation_covariance
+from .curvature import dimensionless, with_curvature
 from .equations import build_equations, solve_equations
+from .uncertainty import chi_square_factor, free_levels, noise_terms, sandwich
 from .wander import equation_bias_wander
 
 #: Corrections below these (natural units: ug, ppm, arcsec, deg/h) end the iteration regardless of sigma.
@@ -131,9 +134,12 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     else:
         raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
-    wander, params, cov, factor = _last_solve_with_wander(rec, navs, equations, noise_plan, a, b, covariance,
-                                                          north_quadratic, history, corrections, cov, factor, warnings)
     dof = len(b) - N_PARAMS
+    paper_sigma = ParameterSet(params, covariance=_covariance_of_values(
+        params, cov * _variance_factor(factor, dof, []))).natural_sigma()  # the paper's: the last solve's formal sigma
+    final = _final_solve(rec, navs, equations, noise_plan, a, b, covariance, north_quadratic, history, corrections,
+                         warnings, lambda p: build_equations(rec, p, north_quadratic, not paper_equations, False)[1])
+    params, cov, factor, wander = final.params, final.covariance, final.factor, final.wander
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
     checks = _checks(result, factor, len(b), noise_plan, warnings, wander)
@@ -143,7 +149,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
                              inflate, NoiseReport(with_wander(noise_plan.model, wander) or noise_plan.model,
                                                   noise_plan.raw, None, dict(noise_plan.source), wander),
                              noise_plan.motions,
-                             ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
+                             ils=IlsDetails(len(b), [eq.label for eq in equations], corrections, paper_sigma,
+                                            final.free_levels, final.curvature))
 
 
 def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.ndarray, factor: float) -> str:
@@ -154,25 +161,56 @@ def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.nda
             f"variance factor {factor:.3g}")
 
 
-def _last_solve_with_wander(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.ndarray, b: np.ndarray,
-                            covariance: np.ndarray, north_quadratic: bool, history: list, corrections: list,
-                            cov: np.ndarray, factor: float, warnings: list[str]):
-    """The bias instability the equations show without a datasheet (:mod:`.wander`), linearised where the last
-    solve was.  When a term is included the last solve is made again under the equations' covariance with it
-    (``history`` and ``corrections`` updated, the noise plan records the terms, ``warnings`` gets the warning).
-    Returns ``(estimates, parameters, their covariance, variance factor)``."""
-    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, covariance,
-                                         north_quadratic)
-    if total is None:
-        return wander, history[-1], cov, factor
-    record(noise_plan, wander)
-    if describe(wander):
-        warnings.append(describe(wander))
-    x, cov, factor = solve_equations(a, b, total)
-    params = apply_error_estimate(history[-2], x)
-    history[-1] = params.copy()
-    corrections[-1] = x / NATURAL_SCALE
-    return wander, params, cov, factor
+@dataclasses.dataclass
+class _Final:
+    """The last solve under the noise model of the last iteration (:func:`_final_solve`)."""
+
+    params: np.ndarray
+    covariance: np.ndarray  # of the error terms (SI, scale factors relative)
+    factor: float
+    wander: dict
+    free_levels: dict
+    curvature: float
+
+
+def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.ndarray, b: np.ndarray,
+                 weights: np.ndarray, north_quadratic: bool, history: list, corrections: list,
+                 warnings: list[str], rhs: Callable[[np.ndarray], np.ndarray]) -> _Final:
+    """The noise model at the last linearisation (:mod:`.uncertainty`): the white terms the raw data left to the
+    fit sized by the equations' restricted likelihood, the bias instability the equations show without a
+    datasheet (:mod:`.wander`).  When either entered, the last solve is made again under the model
+    (``history`` and ``corrections`` updated, the noise plan records the terms, ``warnings`` gets the wander's
+    warning); otherwise the solve's values stay and their covariance is the sandwich under the final model.
+    Second order is added where the loose combinations reach the tight ones (:mod:`.curvature`)."""
+    sensors = unknown_sensors(noise_plan)
+    terms = noise_terms(rec, history[-2], navs, equations, noise_plan, sensors, wander_tau(rec), north_quadratic)
+    bounds = noise_plan.raw.upper_bounds()
+    levels = free_levels(a, b, terms, {t: float(np.max(getattr(bounds, t))) for t in terms.free})
+    for term, level in levels.items():
+        setattr(noise_plan.model, term, np.full(3, level))
+    white = terms.covariance(levels)
+    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, white,
+                                         north_quadratic, terms.wander)
+    if total is not None:
+        record(noise_plan, wander)
+        if describe(wander):
+            warnings.append(describe(wander))
+    model = white if total is None else total
+    used = weights
+    if total is not None or levels:  # a model the weights did not have: solve again under it
+        used = model
+        x, cov, factor = solve_equations(a, b, model)
+        for sensor, estimate in wander.items():
+            if estimate.included:
+                estimate.cost = bias_cost(sandwich(a, white, white), cov, NAMES, sensor)
+        history[-1] = apply_error_estimate(history[-2], x)
+        corrections[-1] = x / NATURAL_SCALE
+    else:
+        x = corrections[-1] * NATURAL_SCALE
+        cov, factor = sandwich(a, weights, model), chi_square_factor(a, b, x, model)
+    longest = max((rec.group_samples(g).stop - rec.group_samples(g).start) * rec.dt for g in rec.group_ids)
+    cov, share = with_curvature(rhs, history[-2], b, a, used, cov, dimensionless(rec.site.g, longest))
+    return _Final(history[-1], cov, factor, wander, levels, share)
 
 
 def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str],

@@ -89,7 +89,7 @@ def judge_groups(selection: dict, names, z: np.ndarray, covariance: np.ndarray, 
         worst = int(np.argmax(moves))
         out[key] = v | {"hinted": v["selected"], "family_threshold": threshold, "largest_move": float(moves[worst]),
                         "moved": NAMES[worst],
-                        "selected": v["statistic"] > threshold and moves[worst] >= MOVE_FRACTION}
+                        "selected": bool(v["statistic"] > threshold and moves[worst] >= MOVE_FRACTION)}
     return out
 
 

@@ -64,9 +64,10 @@ MAX_GROUP_SAMPLES = 1_500_000
 #: What the ILS fits, in one line.
 FITS = ("the ILS (the paper's method) fits the paper's 21 parameters (eq. 1) only; the extra groups (g-sensitivity, "
         "scale asymmetry, quadratic and cross-quadratic terms, lever arms, time offset) need the nlp solver")
-SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
-                 "from the sensor noise model (raw-data estimate, datasheet, bias wander of the static data), times the variance factor when "
-                 "the residuals exceed it")
+SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration under the equations' covariance "
+                 "at that iteration from the sensor noise model (raw-data estimate, datasheet, white noise under "
+                 "the pulses sized by the equations, bias wander of the static data), with the second order of "
+                 "loosely determined combinations, times the variance factor when the residuals exceed it")
 
 
 def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_iterations: int = 10,
@@ -142,7 +143,7 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     params, cov, factor, wander = final.params, final.covariance, final.factor, final.wander
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
-    checks = _checks(result, factor, len(b), noise_plan, warnings, wander)
+    checks = _checks(result, factor, len(b), noise_plan, warnings, wander, final)
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
                              float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
@@ -214,13 +215,21 @@ def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.n
 
 
 def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str],
-            wander: dict) -> list[Check]:
-    """The equations' chi-square (two-sided) and the separability checks; their warnings into ``warnings``."""
+            wander: dict, final: _Final | None = None) -> list[Check]:
+    """The equations' chi-square (two-sided; their residuals over the noise model, as the NLP's residual checks
+    say it), the second order of the linearisation, and the separability checks; their warnings into
+    ``warnings``."""
     dof = equations - N_PARAMS
     low, limit = factor_low(dof), factor_limit(dof)
+    sized = "".join(f"; {t} sized by the equations' restricted likelihood" for t in (final.free_levels if final else {}))
     checks = [Check("equations vs noise model", factor, limit, low <= factor <= limit,
-                    f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom), noise "
-                    f"from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", low)]
+                    f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom): "
+                    f"residuals {np.sqrt(factor):.3g} times the noise model at the last iteration (noise from "
+                    f"{noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}{sized})", low)]
+    if final is not None and final.curvature > 0.0:
+        checks.append(Check("second order of the linearisation", final.curvature, 1.0, True,
+                            "largest share of a parameter's variance from the curvature of the equations across the "
+                            "loosely determined combinations (the alignment of few groups), included in sigma", 0.0))
     separation_checks, separation_text = separation_warnings(result, wander)
     warnings += noise_plan.warnings + separation_text
     return checks + separation_checks

@@ -149,3 +149,21 @@ def chi_square_factor(a: np.ndarray, b: np.ndarray, x: np.ndarray, covariance: n
     residual = b - a @ x
     white = np.linalg.solve(np.linalg.cholesky(covariance), residual)
     return float(white @ white) / max(len(b) - a.shape[1], 1)
+
+
+def predicted_covariance(rec, params: np.ndarray, noise: SensorNoise, north_quadratic: bool = True,
+                         alignment_up: bool = True) -> np.ndarray:
+    """The covariance (SI error terms, scale factors relative) the ILS reaches on ``rec``'s schedule at the
+    values ``params`` under ``noise``, before any data: its equations' generalised least squares under their
+    exact covariance, with the second order of :mod:`.curvature` (a noise-free recording at the truth, as
+    :func:`studies.prediction.predict_problem` makes it)."""
+    from .curvature import dimensionless, with_curvature
+    from .equations import build_equations
+
+    a, b, equations, navs = build_equations(rec, params, north_quadratic, alignment_up)
+    sigma = equation_covariances(rec, params, navs, equations, [noise], north_quadratic)[0]
+    cov = sandwich(a, sigma, sigma)
+    longest = max((rec.group_samples(g).stop - rec.group_samples(g).start) * rec.dt for g in rec.group_ids)
+    cov, _ = with_curvature(lambda p: build_equations(rec, p, north_quadratic, alignment_up, False)[1], params, b, a,
+                            sigma, cov, dimensionless(rec.site.g, longest))
+    return cov

@@ -111,10 +111,10 @@ def predict_problem(problem: Problem, model="21") -> Prediction:
 
 def predict_problem_ils(problem: Problem) -> np.ndarray:
     """Predicted 1-sigma (natural units) of the paper's ILS on a problem's schedule at its stated noise: its
-    equations' covariance on a noise-free simulation at the truth (:func:`calibrate.ils.uncertainty.
-    predicted_covariance`).  The ILS aligns each group on its first position, so on schedules of few
+    equations' covariance on a noise-free simulation at the truth
+    (:func:`calibrate.ils.predicted.predicted_covariance`).  The ILS aligns each group on its first position, so on schedules of few
     groups it can be far from the NLP's (:func:`predict_problem`)."""
-    from ..calibrate.ils.uncertainty import predicted_covariance
+    from ..calibrate.ils.predicted import predicted_covariance
 
     sim = simulate(problem, seed=0, noise=False)
     truth = problem.truth.values[:N_PARAMS]

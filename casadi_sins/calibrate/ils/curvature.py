@@ -33,6 +33,12 @@ GATE = 1e-3
 MAX_DIRECTIONS = 5
 
 
+def dimensionless_of(rec) -> np.ndarray:
+    """:func:`dimensionless` for a recording: its gravity and its longest group."""
+    longest = max((rec.group_samples(g).stop - rec.group_samples(g).start) * rec.dt for g in rec.group_ids)
+    return dimensionless(rec.site.g, longest)
+
+
 def dimensionless(g: float, longest_group_s: float) -> np.ndarray:
     """Factors taking the SI error terms (scale factors relative) to dimensionless sizes."""
     out = np.ones(len(NAMES))

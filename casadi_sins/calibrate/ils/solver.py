@@ -50,7 +50,7 @@ from ..limits import factor_limit, factor_low, separation_warnings
 from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
 from ..wander import bias_cost, describe, record, unknown_sensors, wander_tau, with_wander
 from .covariance import equation_covariance
-from .curvature import dimensionless, with_curvature
+from .curvature import dimensionless_of, with_curvature
 from .equations import build_equations, solve_equations
 from .uncertainty import chi_square_factor, free_levels, noise_terms, sandwich
 from .wander import equation_bias_wander
@@ -209,8 +209,7 @@ def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.n
     else:
         x = corrections[-1] * NATURAL_SCALE
         cov, factor = sandwich(a, weights, model), chi_square_factor(a, b, x, model)
-    longest = max((rec.group_samples(g).stop - rec.group_samples(g).start) * rec.dt for g in rec.group_ids)
-    cov, share = with_curvature(rhs, history[-2], b, a, used, cov, dimensionless(rec.site.g, longest))
+    cov, share = with_curvature(rhs, history[-2], b, a, used, cov, dimensionless_of(rec))
     return _Final(history[-1], cov, factor, wander, levels, share)
 
 

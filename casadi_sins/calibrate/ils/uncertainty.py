@@ -17,6 +17,8 @@ last iteration:
   keep their first-iteration weights);
 * **second order** (:mod:`.curvature`): where the loose combinations are so wide that the curvature of the
   equations across them reaches the tight ones.
+
+The same before any data, on a schedule: :mod:`.predicted`.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from ...model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
 from ...model.registry import NATURAL_SCALE
 from ...noise.plan import NoisePlan
 from .covariance import equation_covariances
+from .wander import unit_instability
 
 #: The white terms the raw data may leave to the fit, and their floors.
 FREE_FLOORS = {"gyro_arw": GYRO_ARW_FLOOR, "accel_vrw": ACCEL_VRW_FLOOR}
@@ -68,8 +71,6 @@ def noise_terms(rec, params: np.ndarray, navs, equations, noise_plan: NoisePlan,
                 north_quadratic: bool) -> NoiseTerms:
     """The equations' covariance of every term in one pass (:class:`NoiseTerms`): ``sensors`` without a
     datasheet's instability get a unit Gauss-Markov term of correlation time ``tau``."""
-    from .wander import unit_instability  # the wander module uses this one's terms
-
     free = free_terms(noise_plan)
     fixed = dataclasses.replace(noise_plan.model, **{t: np.zeros(3) for t in free})
     units = [_unit_white(t) for t in free]
@@ -150,20 +151,3 @@ def chi_square_factor(a: np.ndarray, b: np.ndarray, x: np.ndarray, covariance: n
     white = np.linalg.solve(np.linalg.cholesky(covariance), residual)
     return float(white @ white) / max(len(b) - a.shape[1], 1)
 
-
-def predicted_covariance(rec, params: np.ndarray, noise: SensorNoise, north_quadratic: bool = True,
-                         alignment_up: bool = True) -> np.ndarray:
-    """The covariance (SI error terms, scale factors relative) the ILS reaches on ``rec``'s schedule at the
-    values ``params`` under ``noise``, before any data: its equations' generalised least squares under their
-    exact covariance, with the second order of :mod:`.curvature` (a noise-free recording at the truth, as
-    :func:`studies.prediction.predict_problem` makes it)."""
-    from .curvature import dimensionless, with_curvature
-    from .equations import build_equations
-
-    a, b, equations, navs = build_equations(rec, params, north_quadratic, alignment_up)
-    sigma = equation_covariances(rec, params, navs, equations, [noise], north_quadratic)[0]
-    cov = sandwich(a, sigma, sigma)
-    longest = max((rec.group_samples(g).stop - rec.group_samples(g).start) * rec.dt for g in rec.group_ids)
-    cov, _ = with_curvature(lambda p: build_equations(rec, p, north_quadratic, alignment_up, False)[1], params, b, a,
-                            sigma, cov, dimensionless(rec.site.g, longest))
-    return cov

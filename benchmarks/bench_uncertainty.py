@@ -137,6 +137,8 @@ def main() -> None:
     parser.add_argument("--designs", type=int, default=10)
     parser.add_argument("--solvers", nargs="+", default=["nlp", "ils"])
     parser.add_argument("--out", default="results")
+    parser.add_argument("--merge", metavar="RUNS_CSV",
+                        help="an earlier uncertainty-runs.csv: its recipes not run now are kept in the files")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -155,6 +157,12 @@ def main() -> None:
             rows += run_rows("design-300s", problem, args.first_seed + k, args.solvers)
             print(f"design {k + 1} done ({time.perf_counter() - t0:.0f} s)", flush=True)
     frame = pd.DataFrame(rows)
+    if args.merge:
+        earlier = pd.read_csv(args.merge, keep_default_na=False, na_values=[""])
+        earlier["failed"] = earlier["failed"].fillna("").astype(str)
+        order = list(dict.fromkeys(list(earlier["recipe"]) + list(frame["recipe"])))
+        frame = pd.concat([earlier[~earlier["recipe"].isin(frame["recipe"].unique())], frame], ignore_index=True)
+        frame = frame.iloc[np.argsort([order.index(r) for r in frame["recipe"]], kind="stable")]
     frame.to_csv(out / "uncertainty-runs.csv", index=False)
     table, per_parameter = summary(frame)
     write_frame(table, out / "uncertainty-summary",

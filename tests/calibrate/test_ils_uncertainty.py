@@ -8,7 +8,7 @@ import pytest
 from casadi_sins.calibrate.ils import calibrate_ils
 from casadi_sins.calibrate.ils.curvature import with_curvature
 from casadi_sins.calibrate.ils.equations import solve_equations
-from casadi_sins.calibrate.ils.uncertainty import NoiseTerms, free_levels, sandwich
+from casadi_sins.calibrate.ils.uncertainty import NoiseTerms, free_levels, sandwich, small_sample_factor
 from casadi_sins.data.problem import load_problem
 from casadi_sins.model.parameters import joint_chi_square
 from casadi_sins.model.registry import N_PARAMS, NATURAL_SCALE, SCALE_MASK
@@ -91,3 +91,8 @@ def test_the_paper_recording_keeps_its_values_and_paper_sigma(kang_ils):
     assert kang_ils.ils.curvature == 0.0
     final = kang_ils.parameters.natural_sigma()
     assert np.all(np.abs(final / kang_ils.ils.paper_sigma_natural - 1.0) < 0.01)
+
+
+def test_a_level_set_by_the_equations_widens_by_students_t():
+    assert small_sample_factor(27, {"accel_vrw": 1e-5}) == pytest.approx(27 / 25)
+    assert small_sample_factor(27, {}) == 1.0

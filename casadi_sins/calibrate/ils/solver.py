@@ -52,7 +52,7 @@ from ..wander import bias_cost, describe, record, unknown_sensors, wander_tau, w
 from .covariance import equation_covariance
 from .curvature import dimensionless_of, with_curvature
 from .equations import build_equations, solve_equations
-from .uncertainty import chi_square_factor, free_levels, noise_terms, sandwich
+from .uncertainty import chi_square_factor, free_levels, noise_terms, sandwich, small_sample_factor
 from .wander import equation_bias_wander
 
 #: Corrections below these (natural units: ug, ppm, arcsec, deg/h) end the iteration regardless of sigma.
@@ -204,6 +204,7 @@ def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.n
         for sensor, estimate in wander.items():
             if estimate.included:
                 estimate.cost = bias_cost(sandwich(a, white, white), cov, NAMES, sensor)
+        cov = cov * small_sample_factor(len(b) - N_PARAMS, levels)
         history[-1] = apply_error_estimate(history[-2], x)
         corrections[-1] = x / NATURAL_SCALE
     else:

@@ -161,13 +161,15 @@ def main() -> None:
         earlier = pd.read_csv(args.merge, keep_default_na=False, na_values=[""])
         earlier["failed"] = earlier["failed"].fillna("").astype(str)
         order = list(dict.fromkeys(list(earlier["recipe"]) + list(frame["recipe"])))
+        earlier_recipes = [r for r in dict.fromkeys(earlier["recipe"]) if r not in set(frame["recipe"])]
         frame = pd.concat([earlier[~earlier["recipe"].isin(frame["recipe"].unique())], frame], ignore_index=True)
         frame = frame.iloc[np.argsort([order.index(r) for r in frame["recipe"]], kind="stable")]
     frame.to_csv(out / "uncertainty-runs.csv", index=False)
     table, per_parameter = summary(frame)
+    kept = f"; {', '.join(earlier_recipes)} kept from {Path(args.merge).name}" if args.merge else ""
     write_frame(table, out / "uncertainty-summary",
                 title=f"Issue 40: per recipe and solver, no datasheet (seeds from {args.first_seed}; "
-                f"{time.perf_counter() - t0:.0f} s)")
+                f"{time.perf_counter() - t0:.0f} s{kept})")
     write_frame(per_parameter, out / "uncertainty-montecarlo",
                 title="Issue 40: RMS of error/sigma (each run's own sigma) per recipe, solver and parameter")
     print(table.to_string(index=False))

@@ -136,7 +136,9 @@ def describe(estimates: dict[str, SensorWander]) -> str | None:
     if not parts:
         return None
     tau = next(iter(estimates.values())).tau
+    cost = max(w.cost for w in estimates.values() if w.included)
+    widened = f" (up to {cost:.3g} times wider)" if cost > 1.0 else ""
     return (f"the static data show bias instability beyond the white noise and no datasheet gives it: "
             f"{', '.join(parts)}, modelled as a Gauss-Markov wander with an assumed correlation time of {tau:.0f} s "
-            f"({TAU_WORDS}, which cannot show its own); the bias sigmas include it. Give the datasheet's "
+            f"({TAU_WORDS}, which cannot show its own); the bias sigmas include it{widened}. Give the datasheet's "
             "bias instability (--noise) for a founded value")

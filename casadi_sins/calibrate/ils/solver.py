@@ -194,8 +194,6 @@ def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.n
                                          north_quadratic, terms.wander)
     if total is not None:
         record(noise_plan, wander)
-        if describe(wander):
-            warnings.append(describe(wander))
     model = white if total is None else total
     used = weights
     if total is not None or levels:  # a model the weights did not have: solve again under it
@@ -205,6 +203,8 @@ def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.n
             if estimate.included:
                 estimate.cost = bias_cost(sandwich(a, white, white), cov, NAMES, sensor)
         cov = cov * small_sample_factor(len(b) - N_PARAMS, levels)
+        if describe(wander):
+            warnings.append(describe(wander))
         history[-1] = apply_error_estimate(history[-2], x)
         corrections[-1] = x / NATURAL_SCALE
     else:

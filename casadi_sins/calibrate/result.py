@@ -101,6 +101,9 @@ class IlsDetails:
     equations: int
     labels: list[str]
     corrections_natural: list[np.ndarray]
+    paper_sigma_natural: np.ndarray | None = None  # the paper's: formal sigma of the last solve, first weights
+    free_levels: dict = dataclasses.field(default_factory=dict)  # white terms sized by the equations (SI)
+    curvature: float = 0.0  # largest share of a variance from second order
 
 
 @dataclasses.dataclass(repr=False)
@@ -141,6 +144,9 @@ class CalibrationResult:
         Seconds per phase.
     nlp, ils : NlpDetails or IlsDetails or None
         Solver-specific details.
+    notes : list of str
+        What the report states without doubting the table (a term the data hint at that would change no
+        value beyond its noise).
     """
 
     parameters: ParameterSet
@@ -162,6 +168,7 @@ class CalibrationResult:
     timings: dict[str, float] = dataclasses.field(default_factory=dict)
     nlp: NlpDetails | None = None
     ils: IlsDetails | None = None
+    notes: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def x(self) -> np.ndarray:

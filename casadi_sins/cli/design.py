@@ -55,6 +55,9 @@ def add_design_command(sub) -> None:
                    help="Monte Carlo of the design: N simulated recordings (seeds from 10000, as montecarlo) "
                    "calibrated with both solvers; files in OUT/verify/")
     p.add_argument("--workers", type=int, help="local processes of the Monte Carlo (default one per core)")
+    p.add_argument("--solvers", nargs="+", default=["nlp"], choices=["nlp", "ils"],
+                   help="solvers whose predicted sigma the report gives: the search scores the NLP's (the default "
+                   "solver); with ils also the paper's ILS's on both schedules (default nlp)")
     p.add_argument("--out", required=True, help="output folder")
     p.set_defaults(func=cmd_design)
 
@@ -82,7 +85,7 @@ def cmd_design(args) -> int:
     try:
         result = run_design(base, limits, args.criterion, args.model, args.hours, args.cap, args.evaluations,
                             args.seed, args.verify, args.workers, args.out,
-                            progress=message_printer(args, "design"), scheme=scheme)
+                            progress=message_printer(args, "design"), scheme=scheme, solvers=tuple(args.solvers))
     except DesignError as exc:
         raise CliError(str(exc)) from None
     write_files(result.files)
@@ -93,8 +96,13 @@ def cmd_design(args) -> int:
     turns = sorted({(abs(s.angle_deg), round(s.end - s.start, 3)) for s in result.problem.segments()
                     if s.kind == "rotation"})
     print(f"turns {', '.join(f'{a:g} deg in {t:g} s' for a, t in turns)}; total {result.problem.duration:.0f} s")
-    print(f"predicted sigma against {base.name}: geometric mean {score.geometric_mean:.3f}, worst "
+    print(f"predicted sigma (nlp) against {base.name}: geometric mean {score.geometric_mean:.3f}, worst "
           f"{score.ratios.max():.3f}; criterion {args.criterion} {score.value:+.4f}")
+    if result.ils is not None:
+        import numpy as np
+        ratio = result.ils["design"] / result.ils["input"]
+        print(f"predicted sigma (ils) against {base.name}: geometric mean {float(np.exp(np.mean(np.log(ratio)))):.3f}, "
+              f"worst {ratio.max():.3f}")
     if result.verify is not None:
         for solver, s in result.verify.groupby("solver", sort=False):
             print(f"Monte Carlo {solver}: RMS error / sigma {s['rms_over_sigma'].min():.2f}-"

@@ -63,6 +63,8 @@ class SensorWander:
         (model mismatch, left to the checks).
     at_ceiling : bool
         The size is at the top of the search range: the data set it no limit (flagged in the warning).
+    cost : float
+        When included: the largest factor by which it widened the sensor's bias sigma (1 when not included).
     """
 
     sigma: float
@@ -72,6 +74,7 @@ class SensorWander:
     included: bool = False
     mismatch: bool = False
     at_ceiling: bool = False
+    cost: float = 1.0
 
 
 def exponential_kernel(times: np.ndarray, tau: float) -> np.ndarray:

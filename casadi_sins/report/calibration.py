@@ -23,7 +23,7 @@ import pandas as pd
 
 from ..core.version import build_identity, software_versions
 from ..calibrate.result import CalibrationResult
-from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS
+from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS, p_value
 from ..core.units import DEG_PER_H, UG
 from ..data.conditions import conditions_dict
 from ..data.recording import Recording
@@ -116,8 +116,9 @@ def _wander_dict(wander: dict) -> dict | None:
         return None
     unit = {s: scale for s, (_, _, scale) in SENSOR_WORDS.items()}
     return {s: {"sigma": w.sigma / unit[s], "upper": w.upper / unit[s] if math.isfinite(w.upper) else None,
-                "lr": w.lr, "lr_threshold": INCLUDE_LR[s], "tau_s": w.tau, "included": bool(w.included),
-                "mismatch": bool(w.mismatch)} for s, w in wander.items()}
+                "lr": w.lr, "lr_threshold": INCLUDE_LR[s], "p_value": p_value(w.lr), "tau_s": w.tau,
+                "included": bool(w.included), "mismatch": bool(w.mismatch), "bias_sigma_factor": w.cost}
+            for s, w in wander.items()}
 
 
 def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None, command: str | None = None,
@@ -147,6 +148,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "status": int(result.status),
         "message": result.message,
         "warnings": list(result.warnings),
+        "notes": list(result.notes),
         "checks": checks,
         "variance_factor": float(result.variance_factor),
         "grade": grade_data(result.parameters, rec),
@@ -210,6 +212,8 @@ def report_markdown(data: dict) -> str:
     lines += grade_markdown(data.get("grade"))
     lines += ["", "## Warnings", ""]
     lines += [f"- **{markdown_text(w)}**" for w in data["warnings"]] or ["- none"]
+    if data.get("notes"):
+        lines += ["", "## Notes", ""] + [f"- {markdown_text(n)}" for n in data["notes"]]
     lines += ["", "## Parameters", ""]
     lines.append(markdown_table(parameter_display(data), "%.3g"))
     lines += ["", "Values rounded to the second significant digit of their sigma; the full SI values (the table "
@@ -276,15 +280,21 @@ def _wander_sentence(sensor: str, v: dict) -> str:
     if v["included"]:
         return (f"Bias instability of the {name} from the static data (no datasheet): {v['sigma']:.3g} {unit}, "
                 f"Gauss-Markov with an assumed correlation time of {v['tau_s']:.0f} s ({TAU_WORDS}), likelihood "
-                f"ratio {v['lr']:.3g} against none; the bias sigmas include it.")
+                f"ratio {v['lr']:.3g} against none (p = {_p(v)}, threshold {v['lr_threshold']:.3g}); it widened "
+                f"the bias sigmas up to {v.get('bias_sigma_factor', 1.0):.3g} times.")
     bound = (f"95 % upper bound {v['upper']:.3g} {unit}" if v["upper"] is not None else "not bounded by the data")
     seen = (f"what the static data show of a wander (likelihood ratio {v['lr']:.3g}) is explained better by an "
             "acceleration in each static segment: a model mismatch, left to the checks" if v["mismatch"] else
             f"the static data show no wander beyond the white noise (likelihood ratio {v['lr']:.3g} against none, "
-            f"threshold {v['lr_threshold']:.3g})")
+            f"p = {_p(v)}, threshold {v['lr_threshold']:.3g})")
     return (f"Bias instability is not modelled for the {name}: no datasheet value was given and {seen}; {bound} at "
             f"a correlation time of {v['tau_s']:.0f} s. The sigma of the biases excludes an instability below that "
             "bound, and any part of it constant over the recording: give the datasheet (`--noise`).")
+
+
+def _p(v: dict) -> str:
+    """A wander's p-value in words (reports written before it was stored give it from the ratio)."""
+    return f"{v.get('p_value', p_value(v['lr'])):.2g}"
 
 
 def _model_lines(model: dict | None) -> list[str]:

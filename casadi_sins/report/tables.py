@@ -82,6 +82,9 @@ def parameter_report(result, truth: ParameterSet | None = None) -> pd.DataFrame:
     params = result.parameters
     frame = pd.DataFrame({"parameter": params.names, "unit": params.units, "value": params.values,
                           "natural unit": params.natural_units, "sigma (natural)": params.natural_sigma()})
+    paper = getattr(result.ils, "paper_sigma_natural", None) if getattr(result, "ils", None) else None
+    if paper is not None:  # the paper's own: the last solve's formal sigma under its first-iteration weights
+        frame["paper's sigma (natural)"] = paper
     if truth is not None:
         err = truth_errors(params, truth)
         frame["truth"] = [truth[n] if n in truth.names else np.nan for n in params.names]
@@ -100,7 +103,8 @@ def calibration_tables(result, stem: str | Path, name: str, truth: ParameterSet 
     sigma_si = [sigma_in_value_unit(n, v, s) * (1.0 if group_of(n).relative else group_of(n).natural_scale)
                 for n, v, s in zip(report["parameter"], report["value"], report["sigma (natural)"])]
     display = rounded(report.assign(_sigma=sigma_si), {"value": "_sigma", "truth": "_sigma",
-                                                       "error (natural)": "sigma (natural)"}).drop(columns="_sigma")
+                                                       "error (natural)": "sigma (natural)",
+                                                       "_paper": "paper's sigma (natural)"}).drop(columns="_sigma")
     files.update(frame_files(report, f"{stem}-parameters",
                              f"{name}: {result.solver} calibration ({result.nit} iterations, "
                              f"{result.wall_time:.2f} s). sigma: {result.sigma_meaning}", "%.6g", display))

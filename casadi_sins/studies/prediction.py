@@ -28,7 +28,7 @@ from ..core.files import safe_stem
 from ..data.tables import write_table
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet
-from ..model.registry import ACCEL_SCALE, CORE_SPANS, GYRO_SCALE, GROUPS, N_PARAMS, NAMES, group_of, groups_in, model_names, natural_unit_of
+from ..model.registry import ACCEL_SCALE, CORE_SPANS, GYRO_SCALE, GROUPS, N_PARAMS, NAMES, SCALE_MASK, group_of, groups_in, model_names, natural_unit_of
 from ..noise.kalman import NoiseSystem
 from ..noise.plan import plan_noise
 from ..report.plots import legend_outside, pyplot, save_figure
@@ -107,6 +107,22 @@ def predict_problem(problem: Problem, model="21") -> Prediction:
     truth = problem.truth.values
     noise = SensorNoise.from_deviations(problem.deviations, dt, truth[GYRO_SCALE], truth[ACCEL_SCALE])
     return predict(sim.recording, problem.truth, noise, name=problem.name, model=model)
+
+
+def predict_problem_ils(problem: Problem) -> np.ndarray:
+    """Predicted 1-sigma (natural units) of the paper's ILS on a problem's schedule at its stated noise: its
+    equations' covariance on a noise-free simulation at the truth
+    (:func:`calibrate.ils.predicted.predicted_covariance`).  The ILS aligns each group on its first position, so on schedules of few
+    groups it can be far from the NLP's (:func:`predict_problem`)."""
+    from ..calibrate.ils.predicted import predicted_covariance
+
+    sim = simulate(problem, seed=0, noise=False)
+    truth = problem.truth.values[:N_PARAMS]
+    noise = SensorNoise.from_deviations(problem.deviations, 1.0 / problem.rate_hz, truth[GYRO_SCALE],
+                                        truth[ACCEL_SCALE])
+    cov = predicted_covariance(sim.recording, truth, noise)
+    relative = np.sqrt(np.diag(cov))
+    return ParameterSet(truth, sigma=relative * np.where(SCALE_MASK, np.abs(truth), 1.0)).natural_sigma()
 
 
 def predict_file(path: str | Path, accel_vrw_ug_rthz: float | None = None, gyro_arw_deg_rth: float | None = None,

@@ -183,6 +183,7 @@ def test_bias_instability_without_a_datasheet_is_measured_and_named(kang_problem
     result = calibrate_nlp(sim.recording)
     wander = result.noise.bias_wander["accel"]
     assert wander.included and 1.0 < wander.sigma / UG < wander.upper / UG < 20.0
+    assert wander.lr > 6.63 and wander.cost > 1.0  # the evidence, and what it cost the bias sigma (issue 40)
     assert wander.tau == pytest.approx(0.5 * (sim.recording.time[-1] - sim.recording.time[0] + sim.recording.dt))
     assert result.noise.sources["accel_bias_instability"].startswith("static data")
     assert result.noise.model.accel_bias_instability == wander.sigma

@@ -122,6 +122,7 @@ def test_cli_design_writes_a_problem_that_analyze_takes(tmp_path, capsys):
     problem = load_problem(out / "design.toml")
     assert problem.duration <= 300.0 + 1e-6
     assert (out / "design.png").stat().st_size > 0 and "## Predicted sigma" in (out / "design.md").read_text()
+    assert "hold for the NLP" in (out / "design.md").read_text() and "ILS design sigma" not in (out / "design.md").read_text()
     printed = capsys.readouterr().out
     turns = next(line for line in printed.splitlines() if line.startswith("turns "))
     assert all(turns.count(f"{a} deg in") <= 1 for a in (90, 180))  # each angle once, with its time
@@ -159,3 +160,17 @@ def test_cli_design_verify_reports_what_its_runs_can_say_of_the_sigma(tmp_path, 
     mc = next((out / "verify").glob("*-montecarlo.md")).read_text()
     assert "## Is the sigma honest?" in mc and mc.count("summed joint chi-square") == 2  # nlp and ils
     assert "an exact sigma gives" in capsys.readouterr().out
+
+
+def test_cli_design_gives_the_ils_prediction_beside_the_nlp_when_asked(tmp_path, capsys):
+    """``--solvers nlp ils``: the ILS's own predicted sigma on both schedules; on a 300 s design of one group the
+    paper's method (which aligns each group) is far less precise than the NLP's prediction says."""
+    out = tmp_path / "d"
+    assert main(["design", "problems/kang2013.toml", "--total-s", "300", "--evaluations", "2", "--solvers", "nlp",
+                 "ils", "--out", str(out)]) == 0
+    text = (out / "design.md").read_text()
+    assert "ILS design sigma" in text and "ILS (the paper's method) on the design" in text
+    printed = capsys.readouterr().out
+    nlp = float(printed.split("predicted sigma (nlp)")[1].split("geometric mean ")[1].split(",")[0])
+    ils = float(printed.split("predicted sigma (ils)")[1].split("geometric mean ")[1].split(",")[0])
+    assert ils > 3.0 * nlp

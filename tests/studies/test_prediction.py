@@ -8,7 +8,7 @@ from casadi_sins.cli import main
 from casadi_sins.data.tables import read_table
 from casadi_sins.model import registry as R
 from casadi_sins.studies.montecarlo import run, summary
-from casadi_sins.studies.prediction import predict_problem
+from casadi_sins.studies.prediction import predict_problem, predict_problem_ils
 
 
 @pytest.fixture(scope="module")
@@ -76,3 +76,11 @@ def test_montecarlo_command(tmp_path, short_problem, monkeypatch):
     frame = pd.read_csv(tmp_path / "short-montecarlo.csv")
     assert {"rms_error", "predicted_sigma", "rms_over_predicted"} <= set(frame.columns)
     assert (tmp_path / "short-montecarlo.png").exists()
+
+
+def test_the_ils_prediction_is_the_ils_sigma_of_a_noisy_run(kang_problem, kang_ils):
+    """The ILS's own prediction (its equations' covariance at the truth, no data) is what it reports from data
+    within the noise of the raw-data estimate (issue 40: design --solvers nlp ils)."""
+    predicted = predict_problem_ils(kang_problem)
+    ratio = kang_ils.parameters.natural_sigma() / predicted
+    assert np.all((ratio > 0.85) & (ratio < 1.15)), ratio

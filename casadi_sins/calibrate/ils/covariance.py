@@ -26,6 +26,8 @@ a sampling error that moved the ILS's values by up to about 0.16 sigma between s
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ...data.recording import Recording
@@ -97,15 +99,20 @@ def equation_covariances(rec: Recording, params: np.ndarray, navs: list[GroupNav
                          noises: list[SensorNoise], north_quadratic: bool = True) -> np.ndarray:
     """The equations' covariance (models, m, m) under each of several noise models in one pass.
 
-    The models must share their transitions (the same state layout and correlation times: e.g. unit
-    instabilities of each sensor); their step covariances are propagated side by side.
+    The models must share their transitions: the first sets the state layout and the correlation times,
+    the others have the same or none (white noise rides along in a layout with Gauss-Markov biases: its
+    biases stay zero); their step covariances are propagated side by side.
     """
     completed = [n.complete() for n in noises]
     model_noise = completed[0]
     layout = Layout.of(model_noise)
-    if any(Layout.of(n) != layout or (layout.markov and (n.gyro_bias_tau, n.accel_bias_tau) != (
-            model_noise.gyro_bias_tau, model_noise.accel_bias_tau)) for n in completed[1:]):
+    taus = (model_noise.gyro_bias_tau, model_noise.accel_bias_tau)
+    if any(Layout.of(n).unmodelled != layout.unmodelled or (Layout.of(n).markov and (
+            not layout.markov or (n.gyro_bias_tau, n.accel_bias_tau) != taus)) for n in completed[1:]):
         raise ValueError("noise models with different transitions cannot share one covariance pass")
+    if layout.markov:  # a model without instability rides along in the first one's transitions (its biases stay 0)
+        completed = [n if Layout.of(n).markov else dataclasses.replace(n, gyro_bias_tau=taus[0], accel_bias_tau=taus[1])
+                     for n in completed]
     model = LinearModel(layout.n, len(equations))
     by_group: dict[int, list[int]] = {}
     for i, eq in enumerate(equations):

@@ -66,7 +66,7 @@ class Equation:
 
 
 def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = True,
-                    alignment_up: bool = True):
+                    alignment_up: bool = True, design: bool = True):
     """The paper's equations for the current parameters: ``(A, b, equations, navigations)``.
 
     ``alignment_up`` adds the slope of the up velocity in each group's first (alignment) static
@@ -75,13 +75,14 @@ def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = 
     factor poorly.
 
     ``A`` (m, 21) maps the error terms (SI, ordered like :data:`model.registry.NAMES`) to the fitted
-    coefficients, ``b`` (m,) are the coefficients of the navigated velocity (SI).
+    coefficients, ``b`` (m,) are the coefficients of the navigated velocity (SI).  Without ``design`` the
+    sensitivities are not propagated and ``A`` is ``None``.
     """
     rows, rhs, equations, navs = [], [], [], []
     for group in rec.group_ids:
         nav = navigate_group(rec, group, params)
         navs.append(nav)
-        sens = velocity_sensitivity(rec, nav, params)
+        sens = velocity_sensitivity(rec, nav, params) if design else None
         for seg, axes in equation_segments(rec, group, alignment_up):
             sl = rec.segment_samples(seg)
             local = slice(sl.start - nav.samples.start, sl.stop - nav.samples.start)
@@ -92,11 +93,11 @@ def build_equations(rec: Recording, params: np.ndarray, north_quadratic: bool = 
                 if axis == 1 and not north_quadratic:
                     ops = ops[:1]
                 velocity = nav.velocity[local, axis] - (nav.velocity[before, axis] if before >= 0 else 0.0)
-                sensitivity = sens[local, axis, :] - (sens[before, axis, :] if before >= 0 else 0.0)
-                rows.append(ops @ sensitivity)
+                if design:
+                    rows.append(ops @ (sens[local, axis, :] - (sens[before, axis, :] if before >= 0 else 0.0)))
                 rhs.append(ops @ velocity)
                 equations += [Equation(group, seg.number, axis, k + 1) for k in range(len(ops))]
-    return np.vstack(rows), np.concatenate(rhs), equations, navs
+    return (np.vstack(rows) if design else None), np.concatenate(rhs), equations, navs
 
 
 def equation_segments(rec: Recording, group: int, alignment_up: bool):

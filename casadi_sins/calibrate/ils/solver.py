@@ -32,6 +32,7 @@ On a swaying base the method refuses: the coarse alignment assumes a still one.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Callable
 
@@ -47,9 +48,11 @@ from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
 from ..limits import factor_limit, factor_low, separation_warnings
 from ..result import Check, CalibrationError, CalibrationResult, IlsDetails, NoiseReport, outcome
-from ..wander import describe, record, with_wander
+from ..wander import bias_cost, describe, record, unknown_sensors, wander_tau, with_wander
 from .covariance import equation_covariance
+from .curvature import dimensionless_of, with_curvature
 from .equations import build_equations, solve_equations
+from .uncertainty import chi_square_factor, free_levels, noise_terms, sandwich, small_sample_factor
 from .wander import equation_bias_wander
 
 #: Corrections below these (natural units: ug, ppm, arcsec, deg/h) end the iteration regardless of sigma.
@@ -61,9 +64,10 @@ MAX_GROUP_SAMPLES = 1_500_000
 #: What the ILS fits, in one line.
 FITS = ("the ILS (the paper's method) fits the paper's 21 parameters (eq. 1) only; the extra groups (g-sensitivity, "
         "scale asymmetry, quadratic and cross-quadratic terms, lever arms, time offset) need the nlp solver")
-SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration, the equations' covariance "
-                 "from the sensor noise model (raw-data estimate, datasheet, bias wander of the static data), times the variance factor when "
-                 "the residuals exceed it")
+SIGMA_MEANING = ("1-sigma of the generalised least squares of the last iteration under the equations' covariance "
+                 "at that iteration from the sensor noise model (raw-data estimate, datasheet, white noise under "
+                 "the pulses sized by the equations, bias wander of the static data), with the second order of "
+                 "loosely determined combinations, times the variance factor when the residuals exceed it")
 
 
 def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_iterations: int = 10,
@@ -131,19 +135,23 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
     else:
         raise CalibrationError(f"the iterative least squares did not converge in {max_iterations} iterations "
                                f"(last corrections up to {np.max(ratio):.3g} sigma)")
-    wander, params, cov, factor = _last_solve_with_wander(rec, navs, equations, noise_plan, a, b, covariance,
-                                                          north_quadratic, history, corrections, cov, factor, warnings)
     dof = len(b) - N_PARAMS
+    paper_sigma = ParameterSet(params, covariance=_covariance_of_values(
+        params, cov * _variance_factor(factor, dof, []))).natural_sigma()  # the paper's: the last solve's formal sigma
+    final = _final_solve(rec, navs, equations, noise_plan, a, b, covariance, north_quadratic, history, corrections,
+                         warnings, lambda p: build_equations(rec, p, north_quadratic, not paper_equations, False)[1])
+    params, cov, factor, wander = final.params, final.covariance, final.factor, final.wander
     inflate = _variance_factor(factor, dof, warnings)
     result = ParameterSet(params, covariance=_covariance_of_values(params, cov * inflate))
-    checks = _checks(result, factor, len(b), noise_plan, warnings, wander)
+    checks = _checks(result, factor, len(b), noise_plan, warnings, wander, final)
     status, message = outcome(warnings, iteration)
     return CalibrationResult(result, "ils", True, status, message, iteration, initial, history,
                              float(np.sqrt(factor)), time.perf_counter() - t_start, SIGMA_MEANING, warnings, checks,
                              inflate, NoiseReport(with_wander(noise_plan.model, wander) or noise_plan.model,
                                                   noise_plan.raw, None, dict(noise_plan.source), wander),
                              noise_plan.motions,
-                             ils=IlsDetails(len(b), [eq.label for eq in equations], corrections))
+                             ils=IlsDetails(len(b), [eq.label for eq in equations], corrections, paper_sigma,
+                                            final.free_levels, final.curvature))
 
 
 def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.ndarray, factor: float) -> str:
@@ -154,35 +162,74 @@ def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.nda
             f"variance factor {factor:.3g}")
 
 
-def _last_solve_with_wander(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.ndarray, b: np.ndarray,
-                            covariance: np.ndarray, north_quadratic: bool, history: list, corrections: list,
-                            cov: np.ndarray, factor: float, warnings: list[str]):
-    """The bias instability the equations show without a datasheet (:mod:`.wander`), linearised where the last
-    solve was.  When a term is included the last solve is made again under the equations' covariance with it
-    (``history`` and ``corrections`` updated, the noise plan records the terms, ``warnings`` gets the warning).
-    Returns ``(estimates, parameters, their covariance, variance factor)``."""
-    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, covariance,
-                                         north_quadratic)
-    if total is None:
-        return wander, history[-1], cov, factor
-    record(noise_plan, wander)
-    if describe(wander):
-        warnings.append(describe(wander))
-    x, cov, factor = solve_equations(a, b, total)
-    params = apply_error_estimate(history[-2], x)
-    history[-1] = params.copy()
-    corrections[-1] = x / NATURAL_SCALE
-    return wander, params, cov, factor
+@dataclasses.dataclass
+class _Final:
+    """The last solve under the noise model of the last iteration (:func:`_final_solve`)."""
+
+    params: np.ndarray
+    covariance: np.ndarray  # of the error terms (SI, scale factors relative)
+    factor: float
+    wander: dict
+    free_levels: dict
+    curvature: float
+
+
+def _final_solve(rec: Recording, navs, equations, noise_plan: NoisePlan, a: np.ndarray, b: np.ndarray,
+                 weights: np.ndarray, north_quadratic: bool, history: list, corrections: list,
+                 warnings: list[str], rhs: Callable[[np.ndarray], np.ndarray]) -> _Final:
+    """The noise model at the last linearisation (:mod:`.uncertainty`): the white terms the raw data left to the
+    fit sized by the equations' restricted likelihood, the bias instability the equations show without a
+    datasheet (:mod:`.wander`).  When either entered, the last solve is made again under the model
+    (``history`` and ``corrections`` updated, the noise plan records the terms, ``warnings`` gets the wander's
+    warning); otherwise the solve's values stay and their covariance is the sandwich under the final model.
+    Second order is added where the loose combinations reach the tight ones (:mod:`.curvature`)."""
+    sensors = unknown_sensors(noise_plan)
+    terms = noise_terms(rec, history[-2], navs, equations, noise_plan, sensors, wander_tau(rec), north_quadratic)
+    bounds = noise_plan.raw.upper_bounds()
+    levels = free_levels(a, b, terms, {t: float(np.max(getattr(bounds, t))) for t in terms.free})
+    for term, level in levels.items():
+        setattr(noise_plan.model, term, np.full(3, level))
+    white = terms.covariance(levels)
+    wander, total = equation_bias_wander(rec, history[-2], navs, equations, noise_plan, a, b, white,
+                                         north_quadratic, terms.wander)
+    if total is not None:
+        record(noise_plan, wander)
+    model = white if total is None else total
+    used = weights
+    if total is not None or levels:  # a model the weights did not have: solve again under it
+        used = model
+        x, cov, factor = solve_equations(a, b, model)
+        for sensor, estimate in wander.items():
+            if estimate.included:
+                estimate.cost = bias_cost(sandwich(a, white, white), cov, NAMES, sensor)
+        cov = cov * small_sample_factor(len(b) - N_PARAMS, levels)
+        if describe(wander):
+            warnings.append(describe(wander))
+        history[-1] = apply_error_estimate(history[-2], x)
+        corrections[-1] = x / NATURAL_SCALE
+    else:
+        x = corrections[-1] * NATURAL_SCALE
+        cov, factor = sandwich(a, weights, model), chi_square_factor(a, b, x, model)
+    cov, share = with_curvature(rhs, history[-2], b, a, used, cov, dimensionless_of(rec))
+    return _Final(history[-1], cov, factor, wander, levels, share)
 
 
 def _checks(result: ParameterSet, factor: float, equations: int, noise_plan: NoisePlan, warnings: list[str],
-            wander: dict) -> list[Check]:
-    """The equations' chi-square (two-sided) and the separability checks; their warnings into ``warnings``."""
+            wander: dict, final: _Final | None = None) -> list[Check]:
+    """The equations' chi-square (two-sided; their residuals over the noise model, as the NLP's residual checks
+    say it), the second order of the linearisation, and the separability checks; their warnings into
+    ``warnings``."""
     dof = equations - N_PARAMS
     low, limit = factor_low(dof), factor_limit(dof)
+    sized = "".join(f"; {t} sized by the equations' restricted likelihood" for t in (final.free_levels if final else {}))
     checks = [Check("equations vs noise model", factor, limit, low <= factor <= limit,
-                    f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom), noise "
-                    f"from {noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}", low)]
+                    f"chi-square per degree of freedom of the {equations} equations ({dof} degrees of freedom): "
+                    f"residuals {np.sqrt(factor):.3g} times the noise model at the last iteration (noise from "
+                    f"{noise_plan.source['accel_vrw']} / {noise_plan.source['gyro_arw']}{sized})", low)]
+    if final is not None and final.curvature > 0.0:
+        checks.append(Check("second order of the linearisation", final.curvature, 1.0, True,
+                            "largest share of a parameter's variance from the curvature of the equations across the "
+                            "loosely determined combinations (the alignment of few groups), included in sigma", 0.0))
     separation_checks, separation_text = separation_warnings(result, wander)
     warnings += noise_plan.warnings + separation_text
     return checks + separation_checks

@@ -33,10 +33,12 @@ def unit_instability(sensor: str, tau: float) -> SensorNoise:
 
 
 def equation_bias_wander(rec: Recording, params: np.ndarray, navs, equations, noise_plan: NoisePlan, a: np.ndarray,
-                         b: np.ndarray, covariance: np.ndarray, north_quadratic: bool = True
+                         b: np.ndarray, covariance: np.ndarray, north_quadratic: bool = True,
+                         units: dict[str, np.ndarray] | None = None
                          ) -> tuple[dict[str, SensorWander], np.ndarray | None]:
     """Bias instability of the sensors without a datasheet value from the equations ``a x = b`` (linearised
-    at ``params``, white-noise ``covariance``).
+    at ``params``, white-noise ``covariance``); ``units`` (sensor -> the equations' covariance under a unit
+    instability) when already computed.
 
     Returns ``(estimates, covariance with the included terms, or None when none is)``.
     """
@@ -44,8 +46,9 @@ def equation_bias_wander(rec: Recording, params: np.ndarray, navs, equations, no
     if not sensors:
         return {}, None
     tau = wander_tau(rec)
-    units = dict(zip(sensors, equation_covariances(rec, params, navs, equations,
-                                                   [unit_instability(s, tau) for s in sensors], north_quadratic)))
+    if units is None:
+        units = dict(zip(sensors, equation_covariances(rec, params, navs, equations,
+                                                       [unit_instability(s, tau) for s in sensors], north_quadratic)))
     chol = np.linalg.cholesky(covariance)
     whiten = np.linalg.solve(chol, np.eye(len(chol)))
     units_w = {s: whiten @ u @ whiten.T for s, u in (units | {"segment": segment_offsets(a, equations)}).items()}

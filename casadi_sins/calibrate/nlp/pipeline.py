@@ -36,9 +36,9 @@ from ..initial import rough_parameters
 from ..limits import SCHEDULE_REMEDY, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
-from ..wander import describe, natural_size, record, with_wander
+from ..wander import bias_cost, describe, natural_size, record, with_wander
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
-from .evidence import candidate_groups, evidence_warning, group_evidence, is_21
+from .evidence import candidate_groups, evidence_note, evidence_warning, group_evidence, is_21
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
 from .ipopt import quick_weights
@@ -73,6 +73,7 @@ class _Run:
     wander: dict = dataclasses.field(default_factory=dict)
     evidence: dict | None = None
     evidence_named: bool = False
+    notes: list[str] = dataclasses.field(default_factory=list)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -252,6 +253,10 @@ def _evidence(run: _Run, graph: ResidualGraph, fit: Fit, misfit: str) -> bool:
         run.say("terms outside the 21 on this misfit: " + (", ".join(
             f"{g} {v['statistic']:.3g} (threshold {v['threshold']:.3g})" for g, v in run.evidence.items()) or "none"))
     message = evidence_warning(run.evidence, misfit)
+    note = evidence_note(run.evidence, misfit)
+    if note and not message and not run.notes:
+        run.notes.append(note)
+        run.say(f"note: {note}")
     if message and not run.evidence_named:
         run.evidence_named = True
         run.warnings.append(message)
@@ -275,10 +280,13 @@ def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
                 f"{', taken for model mismatch' if wander.mismatch else ''})")
     if model is None:
         return fit
-    stats = fit.ipopt_stats
+    stats, before = fit.ipopt_stats, fit.covariance_natural
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, model, fit.z, fit.use_rotation_steps,
                                     run.progress, update_free=False)
     fit.ipopt_stats = stats
+    for sensor, wander in run.wander.items():
+        if wander.included:  # what it cost (natural units scale each bias alike: the ratio is unit-free)
+            wander.cost = bias_cost(before, fit.covariance_natural, graph.names, sensor)
     record(run.noise_plan, run.wander)
     message = describe(run.wander)
     if message:
@@ -357,7 +365,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
         float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
         warnings, assessment.checks, assessment.variance_factor,
         NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source), run.wander),
-        run.noise_plan.motions, timings, nlp=details)
+        run.noise_plan.motions, timings, nlp=details, notes=run.notes)
 
 
 def _fmt(values) -> str:

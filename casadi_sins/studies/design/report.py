@@ -62,16 +62,36 @@ def drawing(problems: list[Problem]) -> bytes:
     return figure_bytes(fig)
 
 
+#: What the prediction is, and for which solver it holds.
+SOLVER_WORDS = ("Predicted 1-sigma from the same error model as `analyze` (covariance of the NLP's linearisation "
+                "whitened by the stated noise), natural units. **The prediction, the ratios and the cap hold for "
+                "the NLP** (the default solver, which estimates each group's start attitude); the paper's ILS "
+                "aligns each group on its first position and can be much less precise on a schedule of few "
+                "groups: `design --solvers nlp ils` adds its own predicted sigma.")
+
+
+def ils_lines(names, ils: dict[str, np.ndarray], base_name: str) -> list[str]:
+    """The ILS's predicted sigma on both schedules, in a sentence (Markdown list lines)."""
+    ratio = ils["design"] / ils["input"]
+    worst = int(np.argmax(ratio))
+    return [f"- ILS (the paper's method) on the design: geometric-mean sigma ratio against {base_name} "
+            f"**{float(np.exp(np.mean(np.log(ratio)))):.3f}**, worst {names[worst]} at **{ratio[worst]:.3f}** x "
+            "(its own prediction: the equations' covariance with the second order of its alignment)"]
+
+
 def markdown(base: Problem, design: Problem, ref_score: Score, score: Score, settings: dict[str, str],
-             extra: list[str], png_name: str) -> str:
-    """The text of ``design.md``."""
+             extra: list[str], png_name: str, ils: dict[str, np.ndarray] | None = None) -> str:
+    """The text of ``design.md`` (``ils``: the ILS's predicted sigma on the ``"input"`` and the ``"design"``)."""
     names, units = score.prediction.nominal.names, score.prediction.nominal.natural_units
     sig = sigma_frame(names, units, ref_score, score, base.name)
+    if ils is not None:
+        sig[f"ILS {base.name} sigma"] = ils["input"]
+        sig["ILS design sigma"] = ils["design"]
+        sig["ILS ratio"] = ils["design"] / ils["input"]
+        extra = extra + ils_lines(names, ils, base.name)
     times = pd.DataFrame([{"schedule": p.name, **{k: round(v, 1) for k, v in time_split(p).items()},
                            "positions": len([s for s in p.segments() if s.is_static])} for p in (base, design)])
-    lines = [f"# Designed calibration schedule for {base.name}", "",
-             "Predicted 1-sigma from the same error model as `analyze` (covariance of the NLP's linearisation "
-             "whitened by the stated noise), natural units.", "",
+    lines = [f"# Designed calibration schedule for {base.name}", "", SOLVER_WORDS, "",
              "| setting | value |", "| --- | --- |"] + [f"| {k} | {v} |" for k, v in settings.items()] + [
         "", "## Result", "",
         f"- criterion value (log ratio against {base.name}): design {score.value:+.4f}, input {ref_score.value:+.4f}",

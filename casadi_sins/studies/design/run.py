@@ -29,6 +29,7 @@ class DesignRun:
     verify: object = None  # pandas summary of the Monte Carlo, if run
     seconds: float = 0.0
     checks: list = dataclasses.field(default_factory=list)  # consistency of the Monte Carlo's sigma, per solver
+    ils: dict | None = None  # the ILS's predicted sigma (natural) on the "input" and the "design"
 
 
 def check_limits(limits: Limits) -> None:
@@ -62,10 +63,13 @@ def default_rate(base: Problem) -> float:
 
 def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str = "21", hours: float = 1.0,
                cap: float = 1.1, evaluations: int = 300, seed: int = 0, verify_runs: int = 0, workers=None,
-               out_dir: str | Path = ".", progress: Callable[[str], None] | None = None, scheme=None) -> DesignRun:
+               out_dir: str | Path = ".", progress: Callable[[str], None] | None = None, scheme=None,
+               solvers=("nlp",)) -> DesignRun:
     """Design a schedule for ``base``'s unit and prepare ``design.toml``, ``design.md`` and ``design.png``
     (and with ``verify_runs`` a Monte Carlo of the design, its files under ``verify/``); ``scheme`` (a
-    rotation scheme, with ``criterion="navigation"``) scores the navigation of the modulated INS."""
+    rotation scheme, with ``criterion="navigation"``) scores the navigation of the modulated INS.  The
+    search scores the NLP's prediction; with ``"ils"`` in ``solvers`` the report adds the ILS's own predicted
+    sigma on both schedules (``DesignRun.ils``)."""
     say = progress or (lambda text: None)
     check_limits(limits)
     t0 = time.perf_counter()
@@ -82,7 +86,7 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
                 "turn angles": ", ".join(f"{a} deg" for a in limits.angles),
                 "shortest rest": f"{limits.min_rest_s:g} s (first of a group {limits.first_rest_s:g} s)",
                 "handling between groups": f"{limits.handling_s:g} s",
-                "no parameter worse than": f"{cap:g} x the input's sigma (penalised beyond)",
+                "no parameter worse than": f"{cap:g} x the input's sigma (penalised beyond; the NLP's prediction)",
                 "search": f"{crit.evaluations} predictions in {seconds:.0f} s (seed {seed})"}
     extra = []
     if criterion == "navigation":
@@ -101,8 +105,13 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
         summary, checks, mc_files, line = _verify(problem, best, verify_runs, workers, out, say)
         files.update(mc_files)
         extra.append(line)
-    files[out / "design.md"] = markdown(base, problem, ref, best.score, settings, extra, "design.png").encode()
-    return DesignRun(best, problem, files, summary, seconds, checks)
+    ils = None
+    if "ils" in solvers:
+        from ..prediction import predict_problem_ils
+        say("the ILS's predicted sigma on the input and the design")
+        ils = {"input": predict_problem_ils(base), "design": predict_problem_ils(problem)}
+    files[out / "design.md"] = markdown(base, problem, ref, best.score, settings, extra, "design.png", ils).encode()
+    return DesignRun(best, problem, files, summary, seconds, checks, ils)
 
 
 #: The Monte Carlo's seeds start where ``montecarlo``'s do, so ``--verify N`` and ``montecarlo --runs N`` agree.

@@ -30,7 +30,7 @@ from ..core.orientation import orientation_to_dcm
 from ..core.units import DEG_PER_H, UG
 from ..model.noise import SensorNoise
 from ..model.output import rest_sensitivity
-from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_mask
+from ..model.registry import CORE_SPANS, GROUPS, N_PARAMS, NAMES, groups_in, relative_covariance
 from ..nav.alignment import alignment_error
 from ..nav.errormodel import alignment_sensitivity, input_sensitivity
 from ..nav.errorstate import N_NAV, navigation_block, position_metres, with_sensor_inputs
@@ -179,8 +179,7 @@ def alignment_map(w_b: np.ndarray, f_b: np.ndarray, dt: float, names=NAMES) -> n
 
 def _error_state_covariance(calibration_covariance: np.ndarray, nominal: np.ndarray, names=NAMES) -> np.ndarray:
     """Covariance of the paper's error terms (scale factors relative) from that of the values."""
-    scale = np.where(relative_mask(names), np.abs(nominal), 1.0)
-    return calibration_covariance / np.outer(scale, scale)
+    return relative_covariance(names, nominal, calibration_covariance)
 
 
 def propagate_mean(errors: np.ndarray, attitude: np.ndarray, latitude: float, height: float, gravity: float,

@@ -174,6 +174,8 @@ def cmd_calibrate(args) -> int:
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"{args.solver}: {result.nit} iterations, {result.wall_time:.2f} s; wrote {args.out} and its report "
           f"({', '.join(p.name for p in list(files)[1:3])})" + (f" and {Path(args.report)}/" if args.report else ""))
+    for left in (result.nlp.left_out.values() if result.nlp else ()):  # a note (also in the report)
+        print(f"note: {left['note']}")
     for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
         if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"

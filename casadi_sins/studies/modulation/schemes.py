@@ -36,7 +36,7 @@ from ...core import units
 from ...core.errors import InputError, shown
 from ...core.files import safe_stem
 from ...core.orientation import OrientationError, orientation_to_dcm
-from ...core.toml import array_table_lines, read_toml_text
+from ...core.toml import array_table_lines
 from ...sim.motion import MotionPiece
 from . import shipped
 
@@ -209,12 +209,8 @@ def load_scheme(name_or_path) -> Scheme:
     InputError
         Naming the file (and the step and line) at fault, or listing the shipped schemes.
     """
-    path, is_shipped = shipped.find_file(name_or_path, "schemes", "scheme")
-    data, text = read_toml_text(path, "scheme file")
-    if data.get("format") != FORMAT:
-        raise InputError(path, f"format must be {FORMAT!r}, found {shown(data.get('format'))}")
-    scheme = parse_scheme(data, str(path), array_table_lines(text, "step"))
-    return dataclasses.replace(scheme, source=f"{path.stem} (shipped)" if is_shipped else str(path))
+    data, text, path, origin = shipped.read_file(name_or_path, "schemes", "scheme", FORMAT, "scheme file")
+    return dataclasses.replace(parse_scheme(data, str(path), array_table_lines(text, "step")), source=origin)
 
 
 def body_axis(step: Step, attitude: np.ndarray) -> np.ndarray:

@@ -39,7 +39,6 @@ import numpy as np
 from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError, shown
-from ...core.toml import read_toml
 from ...model import registry
 from .model import N_NAV, NAV_NAMES, PHI, SHEET_NAMES, ErrorModel
 from . import shipped
@@ -226,11 +225,7 @@ def load_sheet(name_or_path) -> Sources:
     InputError
         Naming the file (and the section and key) at fault, or listing the shipped sheets.
     """
-    path, is_shipped = shipped.find_file(name_or_path, "sheets", "error sheet")
-    data = read_toml(path, "error sheet")
-    if data.get("format") != FORMAT:
-        raise InputError(path, f"format must be {FORMAT!r}, found {shown(data.get('format'))}")
-    sheet = parse_sheet(data, str(path))
-    return dataclasses.replace(sheet, origin=f"{path.stem} (shipped)" if is_shipped else str(path))
+    data, _, path, origin = shipped.read_file(name_or_path, "sheets", "error sheet", FORMAT, "error sheet")
+    return dataclasses.replace(parse_sheet(data, str(path)), origin=origin)
 
 

@@ -59,14 +59,14 @@ def inseparable_group(graph: ResidualGraph, weights) -> tuple[str, str, float] |
     information = jac.T @ jac
     names = graph.variable_names()
     every = np.arange(len(names))
-    covariance = np.linalg.inv(information)
+    covariance = np.linalg.pinv(information)  # a rank the schedule lacks elsewhere is not this question
     core = [i for i, name in enumerate(names) if name in NAMES]
     for key in DROP_ORDER:
         members = {i for i, name in enumerate(names) if name in GROUPS[key].names}
         if not members:
             continue
         rest = np.array([i for i in every if i not in members])
-        without = np.linalg.inv(information[np.ix_(rest, rest)])
+        without = np.linalg.pinv(information[np.ix_(rest, rest)])
         position = {i: k for k, i in enumerate(rest)}
         explained = [1.0 - without[position[i], position[i]] / covariance[i, i] for i in core]
         worst = int(np.argmax(explained))

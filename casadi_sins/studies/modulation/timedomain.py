@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from ...core import earth
-from ...core.compiled import cached_functions
+from ...core.compiled import StepChain
 from ...core.earth import Site
 from ...core.errors import InputError
 from ...core.rotations import dcm_to_quat, quat_from_rotvec, quat_multiply
@@ -130,11 +130,36 @@ def _run_step(names: tuple[str, ...]) -> ca.Function:
     return ca.Function("modulation_run_step", [x, p, truth, noise], [free_inertial_step_expr(x, dn_g, dn_a, h)])
 
 
+#: Runs navigated together by one compiled step (a map over the runs); a batch is padded to a multiple.
+RUNS = 32
+
+
+def _runs_step(names: tuple[str, ...], runs: int) -> ca.Function:
+    """:func:`_run_step` mapped over ``runs`` runs, packed for a compiled chain over the steps
+    (:class:`casadi_sins.core.compiled.StepChain`)::
+
+        (x (16 runs), const = the runs' parameters, data = (truth, first, noise (6 runs)))
+            -> (x next, const, (v_E, v_N, latitude, longitude) per run)
+
+    ``first`` is 0 on a piece's first step (the coning and sculling memory starts afresh), 1 elsewhere.
+    """
+    one = _run_step(names)
+    mapped = one.map("modulation_runs", "serial", runs, [2], [])
+    n_truth, n_params = one.size1_in(2), len(names)
+    x, const = ca.MX.sym("x", FREE_STATE * runs), ca.MX.sym("const", n_params * runs)
+    data = ca.MX.sym("data", n_truth + 1 + 6 * runs)
+    states = ca.reshape(x, FREE_STATE, runs)
+    states = ca.vertcat(states[:10, :], data[n_truth] * states[10:, :])
+    after = mapped(states, ca.reshape(const, n_params, runs), data[:n_truth],
+                   ca.reshape(data[n_truth + 1:], 6, runs))
+    out = ca.vertcat(after[4, :], after[5, :], after[7, :], after[8, :])
+    return ca.Function("modulation_runs_step", [x, const, data], [ca.vec(after), const, ca.vec(out)])
+
+
 @functools.lru_cache(maxsize=None)
-def run_step(names: tuple[str, ...]) -> ca.Function:
-    """:func:`_run_step` compiled (:func:`casadi_sins.core.compiled.cached_functions`)."""
-    return cached_functions("modulation_run_step", repr(names), ["modulation_run_step"],
-                            lambda: [_run_step(names)])[0]
+def run_chain(names: tuple[str, ...], runs: int = RUNS) -> StepChain:
+    """:func:`_runs_step` compiled (:mod:`casadi_sins.core.compiled`), as a chain over the steps."""
+    return StepChain("modulation_runs", repr((names, runs)), lambda: _runs_step(names, runs))
 
 
 def step_bounds(pieces, turn_step_deg: float, dwell_step_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -180,15 +205,19 @@ def _memo(kinematics):
     return cached
 
 
-#: Navigation steps whose truth is computed at once (bounds the memory of long runs).
+#: Navigation steps whose truth is computed at once, at most (bounds the memory of long runs).
 CHUNK = 20000
 
 
-def _errors(x: np.ndarray, site: Site) -> np.ndarray:
-    """(N, 4) east and north velocity (m/s), north and east position (m) of the runs' states (16, N)."""
-    r_m, r_n = earth.earth_radii(site.latitude)
-    return np.column_stack([x[4], x[5], (x[7] - site.latitude) * (r_m + site.height),
-                            x[8] * (r_n + site.height) * np.cos(site.latitude)])
+def _segments(which: np.ndarray) -> list[slice]:
+    """Consecutive steps of whole pieces, at most :data:`CHUNK` steps each (one piece alone may exceed it)."""
+    ends = np.flatnonzero(np.r_[which[1:] != which[:-1], True]) + 1
+    out, start = [], 0
+    for k, end in enumerate(ends):
+        if end - start > CHUNK and k and ends[k - 1] > start:
+            out.append(slice(start, ends[k - 1]))
+            start = ends[k - 1]
+    return out + [slice(start, len(which))]
 
 
 def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.random.Generator,
@@ -198,7 +227,7 @@ def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.r
     Returns ``(time (T,), errors (T, N, 4), reference (T, 4))``: the errors against the error-free run
     (index 0) and that run's own error (the algorithm's); the output times are those of
     :func:`covariance.propagate` with the same ``max_step_s``.  ``progress(fraction)``, if given, after
-    each output time with the fraction of the run's time navigated.
+    each stretch of pieces with the fraction of the run's time navigated.
     """
     check_turn_step(turn_step_deg, "navigation step")
     if not (math.isfinite(dwell_step_s) and dwell_step_s > 0):
@@ -207,28 +236,36 @@ def navigate(scheme: Scheme, site: Site, hours: float, errors: Errors, rng: np.r
     pieces = output_pieces(scheme_pieces(scheme, hours * 3600.0), max_step_s)
     t0, t1, which = step_bounds(pieces, turn_step_deg, dwell_step_s)
     n = len(errors.x0)
-    step = run_step(tuple(errors.names)).map("modulation_runs", "serial", n, [2], [])
-    params = errors.parameters().T
-    q0 = np.array([quat_multiply(quat_from_rotvec(-phi), dcm_to_quat(pieces[0].attitude))
-                   for phi in errors.x0[:, M.PHI]])
-    x = np.zeros((FREE_STATE, n))
-    x[0:4], x[7], x[9] = q0.T, site.latitude, site.height
-    density = np.hstack([errors.gyro_arw, errors.accel_vrw]).T  # (6, N)
-    first = np.r_[True, which[1:] != which[:-1]]  # a piece's first step: coning and sculling start afresh
-    last = np.r_[which[1:] != which[:-1], True]
-    out_t, out = [0.0], [_errors(x, site)]
-    for start in range(0, len(t0), CHUNK):
-        part = slice(start, min(start + CHUNK, len(t0)))
-        truth = step_truth(pieces, site, t0[part], t1[part], errors.names)
-        for k, row in zip(range(part.start, part.stop), truth):
-            if first[k]:
-                x[10:16] = 0.0
-            noise = density * math.sqrt(row[6]) * rng.standard_normal((6, n)) if density.any() else np.zeros((6, n))
-            x = np.asarray(step(x, params, row, noise))
-            if last[k]:
-                out_t.append(pieces[which[k]].t1)
-                out.append(_errors(x, site))
-                if progress:
-                    progress(out_t[-1] / (hours * 3600.0))
-    err = np.array(out)
-    return np.array(out_t), err - err[:, :1, :], err[:, 0, :]
+    batches = -(-n // RUNS)
+    chain = run_chain(tuple(errors.names))
+    padded = np.zeros((batches * RUNS, len(errors.x0[0])))
+    padded[:n] = errors.x0  # padding runs: error-free
+    params = Errors(padded, np.zeros((len(padded), 3)), np.zeros((len(padded), 3)), errors.names).parameters()
+    density = np.zeros((len(padded), 6))
+    density[:n] = np.hstack([errors.gyro_arw, errors.accel_vrw])
+    x = np.zeros((len(padded), FREE_STATE))
+    x[:, 0:4] = [quat_multiply(quat_from_rotvec(-phi), dcm_to_quat(pieces[0].attitude)) for phi in padded[:, M.PHI]]
+    x[:, 7], x[:, 9] = site.latitude, site.height
+    flags = np.r_[0.0, (which[1:] == which[:-1]).astype(float)]  # 0 on a piece's first step
+    ends = np.r_[which[1:] != which[:-1], True]
+    outs = [np.column_stack([np.zeros((len(padded), 2)), x[:, 7:9]])[None]]
+    for part in _segments(which):
+        truth = np.hstack([step_truth(pieces, site, t0[part], t1[part], errors.names), flags[part, None]])
+        rows = []
+        for b in range(batches):
+            runs = slice(b * RUNS, (b + 1) * RUNS)
+            noise = np.zeros((len(truth), RUNS, 6))
+            if density[runs].any():
+                noise = density[runs] * np.sqrt(truth[:, 6])[:, None, None] * rng.standard_normal(noise.shape)
+            out, last = chain(x[runs].ravel(), params[runs].ravel(), np.hstack([truth, noise.reshape(len(truth), -1)]))
+            x[runs] = last.reshape(RUNS, FREE_STATE)
+            rows.append(out[ends[part]].reshape(-1, RUNS, 4))
+        outs.append(np.concatenate(rows, axis=1))
+        if progress:
+            progress(t1[part.stop - 1] / (hours * 3600.0))
+    state = np.concatenate(outs)[:, :n]  # (T, N, 4): v_E, v_N, latitude, longitude
+    r_m, r_n = earth.earth_radii(site.latitude)
+    err = np.stack([state[..., 0], state[..., 1], (state[..., 2] - site.latitude) * (r_m + site.height),
+                    state[..., 3] * (r_n + site.height) * np.cos(site.latitude)], axis=-1)
+    time = np.r_[0.0, [pieces[k].t1 for k in which[ends]]]
+    return time, err - err[:, :1, :], err[:, 0, :]

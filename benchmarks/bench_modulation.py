@@ -3,7 +3,7 @@
 Run from anywhere: ``python benchmarks/bench_modulation.py [section ...] [--out results/modulation]``.
 Sections (all by default): guan, latitude, dwell, yuruan, candidates, fig6, coupling, timing, montecarlo.
 Everything but the Monte Carlo takes about a minute of CPU; the Monte Carlo (50 runs per source, 6 h, three
-schemes and a plain-draw repeat) about three to four minutes.  One process, one BLAS thread.
+schemes and a plain-draw repeat) under a minute.  One process, one BLAS thread.
 
 * guan: Guan et al. 2023, Table 1 sheet, 24 h at 34.25 deg: six schemes (``guan2023/``);
 * latitude: the two longitude maxima of the bar against latitude;

@@ -17,25 +17,8 @@ ROWS = [f"gyro_scale_asym_{a},ppm,3,0.05" for a in "xyz"] + [
     f"gyro_gsens_{i}{j},deg/h/g,0.001,0.0002" for i in "xyz" for j in "xyz"]
 
 
-def _table(tmp_path):
-    """A calibrated table of the 21 (navigation grade) and the two gyro groups, with sigma."""
-    rows = []
-    for name in R.NAMES:
-        if "_scale_" in name:
-            accel = name.startswith("accel")
-            unit, value, sigma = ("m/s/pulse", 3.6e-4, 3.6e-10) if accel else ("rad/pulse", 1e-7, 1e-12)
-        elif "_bias_" in name:
-            unit, value, sigma = ("ug", 100.0, 5.0) if name.startswith("accel") else ("deg/h", 0.1, 0.005)
-        else:
-            unit, value, sigma = "arcsec", 10.0, 2.0
-        rows.append(f"{name},{unit},{value},{sigma}")
-    path = tmp_path / "params.csv"
-    path.write_text("parameter,unit,value,sigma\n" + "\n".join(rows + ROWS) + "\n")
-    return path
-
-
-def test_a_modulated_table_shows_its_g_sensitivity_and_asymmetry(tmp_path, capsys):
-    table = _table(tmp_path)
+def test_a_modulated_table_shows_its_g_sensitivity_and_asymmetry(tmp_path, capsys, table_file):
+    table = table_file(tmp_path, extra_rows=ROWS)
     out = tmp_path / "out"
     code = main(["modulate", "--scheme", "strapdown", "dual-axis-16", "--params", str(table), "--hours", "2",
                  "--latitude", "34.25", "--out", str(out), "--no-plots"])

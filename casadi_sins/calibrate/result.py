@@ -92,6 +92,9 @@ class NlpDetails:
     observations: ObservationTable
     whitened_residuals: np.ndarray
     white_noise_per_sample: dict[str, float]
+    #: Extra groups ``extended``/``auto`` left out because the schedule cannot separate them from one of the 21:
+    #: ``{group: {"parameter", "correlation", "note"}}``.
+    left_out: dict = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass

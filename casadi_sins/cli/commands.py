@@ -180,6 +180,8 @@ def cmd_calibrate(args) -> int:
           + (f", certificate {report['certificate']['number']} ({report['certificate']['file']})"
              if args.certificate else "") + (f" and {Path(args.report)}/" if args.report else "")
           + f"; {args.solver} solver, {result.nit} iterations, {result.wall_time:.2f} s")
+    for left in (result.nlp.left_out.values() if result.nlp else ()):  # a note (also in the report)
+        note(left["note"])
     for sensor, wander in result.noise.bias_wander.items():  # notes (also in the report): not with --quiet
         if not wander.included and not args.quiet:
             bound = natural_size(sensor, wander.upper) if np.isfinite(wander.upper) else "not bounded by the data"

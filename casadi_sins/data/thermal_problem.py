@@ -25,7 +25,7 @@ import numpy as np
 
 from ..core.errors import InputError, shown
 from ..core.toml import read_toml
-from ..model.registry import natural_scale_of, relative_mask
+from ..model.registry import natural_size
 from ..model.thermal import ThermalModel
 from .conditions import TEMPERATURE_RANGE_C
 from .problem import Problem, load_problem
@@ -68,7 +68,7 @@ def load_thermal_problem(path: str | Path) -> ThermalProblem:
         raise InputError(path, "[thermal] setpoints_c must be a list of temperatures (degC)")
     setpoints = tuple(_temperature(path, t, "setpoints_c") for t in points)
     truth = problem.truth
-    size = natural_scale_of(truth.names) * np.where(relative_mask(truth.names), np.abs(truth.values), 1.0)
+    size = natural_size(truth.names, truth.values)
     coef = np.column_stack([truth.values, np.zeros(len(size)), np.zeros(len(size))])
     for column, key in ((1, "linear"), (2, "quadratic")):
         for name, value in _coefficients(path, section.get(key, {}), key, truth.names).items():

@@ -45,15 +45,18 @@ def sensor_matrices(p):
     return k_a, p[ACCEL_SCALE], p[ACCEL_BIAS], k_g, p[GYRO_SCALE], p[GYRO_BIAS]
 
 
-def output_model_expr(dtheta, dv, p, dt):
+def output_model_expr(dtheta, dv, p, dt, added=None):
     """Raw pulses ``(dN_g, dN_a)`` from true increments (eq. 1); CasADi expressions.
 
-    ``dtheta``, ``dv`` may be 3 x n matrices of n intervals with ``dt`` a 1 x n row.
+    ``dtheta``, ``dv`` may be 3 x n matrices of n intervals with ``dt`` a 1 x n row.  ``added`` =
+    ``(gyro, accel)``: what the extra groups add to ``K dtheta + B dt`` and ``K dv + B dt`` (their physics,
+    :mod:`model.groups`).
     """
     k_a, s_a, b_a, k_g, s_g, b_g = sensor_matrices(p)
-    dn_g = ca.diag(1 / s_g) @ (k_g @ dtheta + b_g @ dt)
-    dn_a = ca.diag(1 / s_a) @ (k_a @ dv + b_a @ dt)
-    return dn_g, dn_a
+    gyro, accel = k_g @ dtheta + b_g @ dt, k_a @ dv + b_a @ dt
+    if added is not None:
+        gyro, accel = gyro + added[0], accel + added[1]
+    return ca.diag(1 / s_g) @ gyro, ca.diag(1 / s_a) @ accel
 
 
 def compensate_expr(dn_g, dn_a, p, dt, extras=None):
@@ -129,21 +132,6 @@ def compensate(dn_g, dn_a, p, dt: float):
     and applies that to all samples at once.
     """
     return _apply_rows("compensate", dn_g, dn_a, p, dt)
-
-
-def rest_sensitivity(names, rate, force) -> tuple[np.ndarray, np.ndarray]:
-    """``(gyro, accel)``, each (3, extras): what an error of each extra parameter of ``names`` (true minus
-    estimated) adds to the compensated rate and specific force of a unit at rest with body ``rate`` and
-    ``force`` (SI): the groups' own corrections differentiated (:func:`corrections_expr`), per unit time."""
-    extra = tuple(names)[N_PARAMS:]
-    zeros = np.zeros((3, len(extra)))
-    if not extra:
-        return zeros, zeros
-    x = ca.SX.sym("x", len(extra))
-    rate, force = np.asarray(rate, dtype=float), np.asarray(force, dtype=float)
-    regs = sample_rows(rate[None], force[None], 1.0, regressor_blocks(names), rate[None])
-    terms = corrections_expr(x, extra, ca.DM(regs.T), ca.DM(rate), ca.DM(force))
-    return tuple(zeros if c is None else -np.asarray(ca.evalf(ca.jacobian(c, x))) for c in terms)
 
 
 @functools.lru_cache(maxsize=None)

@@ -11,8 +11,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from .registry import (NAMES, N_PARAMS, group_of, groups_in, model_names, natural_scale_of, natural_unit_of,
-                       relative_mask, unit_of)
+from .registry import (NAMES, N_PARAMS, error_scale, group_of, groups_in, model_names, natural_scale_of,
+                       natural_unit_of, relative_covariance, relative_mask, unit_of)
 
 
 def parameter_errors(estimate, truth, names=NAMES) -> np.ndarray:
@@ -122,15 +122,13 @@ class ParameterSet:
         """1-sigma of each parameter in the natural unit of its error (scale factors relative, ppm)."""
         if self.sigma is None:
             return np.full(len(self.names), np.nan)
-        mask = relative_mask(self.names)
-        return self.sigma / natural_scale_of(self.names) / np.where(mask, np.abs(self.values), 1.0)
+        return self.sigma / natural_scale_of(self.names) / error_scale(self.names, self.values)
 
     def relative_covariance(self) -> np.ndarray | None:
         """Covariance of the errors in SI with scale factors relative (the units of :func:`parameter_errors`)."""
         if self.covariance is None:
             return None
-        scale = np.where(relative_mask(self.names), np.abs(self.values), 1.0)
-        return self.covariance / np.outer(scale, scale)
+        return relative_covariance(self.names, self.values, self.covariance)
 
     @property
     def core(self) -> np.ndarray:

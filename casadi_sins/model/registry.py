@@ -113,6 +113,25 @@ def relative_mask(names) -> np.ndarray:
     return np.array([group_of(n).relative for n in names], dtype=bool)
 
 
+def error_scale(names, values) -> np.ndarray:
+    """SI size of one unit of each parameter's error at ``values``: ``|value|`` where the error is relative
+    (scale factors: ``t_ii = S_hat/S - 1``), else 1."""
+    return np.where(relative_mask(names), np.abs(np.asarray(values, dtype=float)), 1.0)
+
+
+def natural_size(names, values) -> np.ndarray:
+    """SI size of one natural unit of each parameter's error at ``values`` (a scale factor's ppm is 1e-6 of
+    its value): divide an SI error or sigma by it for natural units."""
+    return natural_scale_of(names) * error_scale(names, values)
+
+
+def relative_covariance(names, values, covariance) -> np.ndarray:
+    """The covariance of the errors in the error-state convention (scale factors relative, ``t_ii``) from the
+    covariance (SI) of the parameters ``names`` about ``values``."""
+    scale = error_scale(names, values)
+    return np.asarray(covariance, dtype=float) / np.outer(scale, scale)
+
+
 def natural_value_of(name: str, value: float) -> tuple[float, str]:
     """A parameter's *value* in the unit an engineer reads: the natural unit of its error, except scale
     factors, whose value is a pulse weight (gyro arcsec/pulse, accelerometer m/s/pulse)."""

@@ -171,7 +171,8 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         data["post_solve_steps_sigma"] = [float(s) for s in nlp.gls_steps]
         data["rotation_steps_used"] = bool(nlp.rotation_steps_used)
         data["start_offsets_arcsec"] = {str(g): [float(x) for x in v] for g, v in nlp.start_offsets_arcsec.items()}
-        data["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection}
+        data["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection,
+                         "left_out": nlp.left_out}
     if result.ils is not None:
         data["equations"] = result.ils.equations
     if verdict is not None:
@@ -308,6 +309,7 @@ def _model_lines(model: dict | None) -> list[str]:
     for key, choice in (model.get("selection") or {}).items():
         lines.append(f"- {key}: Wald statistic {choice['statistic']:.3g} against {choice['threshold']:.3g} "
                      f"(k ln n): {'kept' if choice['selected'] else 'left at 0'}")
+    lines += [f"- {left['note']}" for left in (model.get("left_out") or {}).values()]
     return lines
 
 

@@ -1,8 +1,13 @@
-"""The motion of a simulated experiment: turntable pieces, deviations from nominal, base sway.
+"""The motion of a unit on a turntable: pieces of still and turning, deviations from nominal, base sway.
+
+One description of motion serves the simulator, the schedule design and the rotation schemes of the
+modulation study (:mod:`studies.modulation.schemes`): a :class:`MotionPiece` holds the attitude still or
+turns it about an axis fixed in the body, ``C(t) = C_0 R(u, alpha(t))``, with a rate profile (sinusoidal,
+minimum-jerk, versine, or constant as a rotation scheme's turns).
 
 The unit sits at the centre of a turntable fixed to the Earth.  In a static segment its attitude
-``C_b^n`` is constant; in a rotation it turns about an axis fixed in the body,
-``C(t) = C_0 R(u, alpha(t))``, with a sinusoidal rate profile; between groups it is handled to the
+``C_b^n`` is constant; in a rotation it turns about an axis fixed in the body with a sinusoidal rate
+profile; between groups it is handled to the
 next start position: one turn with the rotations' rate profile (``[timing] handling = "turn"``, the
 default), or a tumble by hand (``"minimum-jerk"``): slerps through :data:`HANDLING_WAYPOINTS` random
 attitudes, each leg with the minimum-jerk time law ``10 tau^3 - 15 tau^4 + 6 tau^5`` and a peak rate
@@ -28,9 +33,28 @@ HANDLING_LEG_DEG = (60.0, 150.0)
 HANDLING_PEAK_DEG_S = 15.0
 
 
+#: The rate profiles of a turn: the rate over the turn's fraction ``tau`` goes as ``sin(pi tau)``,
+#: ``tau^2 (1 - tau)^2``, ``1 - cos(2 pi tau)`` or is constant.
+PROFILES = ("half-sine", "minimum-jerk", "versine", "constant")
+
+
 @dataclasses.dataclass(frozen=True)
 class MotionPiece:
-    """One piece of the trajectory: attitude ``C0 R(axis, angle(t))`` over ``[t0, t1]``."""
+    """One piece of the trajectory: attitude ``C0 R(axis, angle(t))`` over ``[t0, t1]`` (still: ``axis`` None).
+
+    Attributes
+    ----------
+    t0, t1 : float
+        Start and end, s.
+    attitude : ndarray (3, 3)
+        ``C_b^n`` at ``t0``.
+    axis : ndarray (3,) or None
+        Unit turn axis in the body; ``None`` for a still piece.
+    angle : float
+        Signed angle turned over the piece about ``axis``, rad.
+    profile : str
+        The rate profile (:data:`PROFILES`).
+    """
 
     t0: float
     t1: float
@@ -39,9 +63,16 @@ class MotionPiece:
     angle: float = 0.0  # total angle turned over the piece, rad
     profile: str = "half-sine"
 
+    @property
+    def duration(self) -> float:
+        """Length of the piece, s."""
+        return self.t1 - self.t0
+
     def angle_at(self, t: np.ndarray) -> np.ndarray:
         """Angle turned since ``t0`` (the integral of the rate profile)."""
         tau = np.clip((np.asarray(t) - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
+        if self.profile == "constant":
+            return self.angle * tau
         if self.profile == "half-sine":  # rate ~ sin(pi tau)
             return self.angle * 0.5 * (1.0 - np.cos(np.pi * tau))
         if self.profile == "minimum-jerk":  # rate ~ tau^2 (1 - tau)^2
@@ -53,7 +84,9 @@ class MotionPiece:
         span = self.t1 - self.t0
         tau = (np.asarray(t) - self.t0) / span
         inside = (tau >= 0.0) & (tau <= 1.0)
-        if self.profile == "half-sine":
+        if self.profile == "constant":
+            rate = np.full(np.shape(tau), self.angle / span)
+        elif self.profile == "half-sine":
             rate = self.angle * 0.5 * np.pi / span * np.sin(np.pi * tau)
         elif self.profile == "minimum-jerk":
             rate = self.angle / span * 30.0 * tau**2 * (1.0 - tau) ** 2
@@ -67,10 +100,29 @@ class MotionPiece:
             return np.broadcast_to(self.attitude, np.shape(t) + (3, 3))
         return self.attitude @ rotation_matrix(self.axis, self.angle_at(t))
 
+    def turn_rate(self, t: np.ndarray) -> np.ndarray:
+        """The turntable's rate in the body (rad/s) at times ``t``, shape ``t.shape + (3,)`` (zero when still)."""
+        if self.axis is None:
+            return np.zeros(np.shape(t) + (3,))
+        return self.rate_at(t)[..., None] * self.axis
+
     @property
     def end_attitude(self) -> np.ndarray:
         """``C_b^n`` at ``t1``."""
         return self.attitude_at(np.array(self.t1))
+
+    def part(self, t0: float, t1: float) -> "MotionPiece":
+        """The same motion over ``[t0, t1]`` inside the piece (a still or constant-rate piece only: any other
+        profile would change its shape)."""
+        if self.axis is not None and self.profile != "constant":
+            raise ValueError(f"a {self.profile} turn has no part of the same profile")
+        attitude = self.attitude if t0 == self.t0 else self.attitude_at(np.array(t0))
+        angle = 0.0 if self.axis is None else self.angle * (t1 - t0) / (self.t1 - self.t0)
+        return dataclasses.replace(self, t0=t0, t1=t1, attitude=attitude, angle=angle)
+
+    def shifted(self, offset: float) -> "MotionPiece":
+        """The same piece ``offset`` seconds later."""
+        return dataclasses.replace(self, t0=self.t0 + offset, t1=self.t1 + offset)
 
 
 def plan_motion(problem: Problem, rng: np.random.Generator):

@@ -44,3 +44,24 @@ def test_joint_chi_square_is_the_sum_of_squared_z_for_a_diagonal_covariance_and_
     assert np.isclose(joint_chi_square(estimate, truth), float(z @ z), rtol=1e-12)
     assert np.isclose(z[0], 3.0)
     assert np.isnan(joint_chi_square(ParameterSet(estimate_values, names=NAMES), truth))
+
+
+def test_relative_covariance_and_natural_size_agree_with_the_errors_of_a_draw():
+    """One conversion of the registry: an SI draw of a table's covariance, divided by the natural size, has the
+    natural sigma of the table; the relative covariance is the covariance of :func:`parameter_errors`."""
+    from casadi_sins.model.registry import model_names, natural_size, natural_scale_of, relative_covariance
+
+    names = model_names(("gyro_asym", "quadratic"))
+    truth = ParameterSet(np.concatenate([_truth().values, [3e-6, -2e-6, 1e-6, 1e-6, 2e-6, 3e-6]]), names=names)
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(len(names), len(names)))
+    size = natural_size(names, truth.values)
+    cov = (a @ a.T + np.eye(len(names))) * np.outer(size, size)
+    params = ParameterSet(truth.values, covariance=cov, names=names)
+    draws = truth.values + rng.multivariate_normal(np.zeros(len(names)), cov, size=4000)
+    errors = np.array([parameter_errors(d, truth.values, names) for d in draws])
+    rel = relative_covariance(names, truth.values, cov)
+    np.testing.assert_allclose(np.sqrt(np.diag(rel)) / natural_scale_of(names), params.natural_sigma(), rtol=1e-12)
+    np.testing.assert_allclose(errors.std(axis=0) / np.sqrt(np.diag(rel)), 1.0, atol=0.05)
+    scale = relative_mask(names)
+    np.testing.assert_allclose(natural_size(names, truth.values)[scale], 1e-6 * np.abs(truth.values[scale]))

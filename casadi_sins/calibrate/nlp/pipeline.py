@@ -3,7 +3,8 @@
 1. :func:`_prepare`: observation spacing, the parameter model, the noise plan (raw data, datasheet),
    base motion.
 2. :func:`_observable_graph`: the symbolic graph (:mod:`.graph`); extra groups the schedule cannot
-   see are left at their prior, with a warning.
+   see are left at their prior, with a warning; ``model="extended"`` or ``"auto"`` also leaves out those it
+   cannot separate from one of the 21 (:func:`_separable_graph`), with a note.
 3. :func:`_fit_model`: Ipopt and the generalised least squares (:mod:`.gls`); the velocity steps
    across rotations are dropped when they disagree with the static residuals; ``model="auto"``
    keeps the extra groups the data support (:mod:`.selection`).
@@ -43,7 +44,7 @@ from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
 from .ipopt import quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
-from .selection import model_groups, model_label, select_groups, unobservable_group
+from .selection import inseparable_group, model_groups, model_label, select_groups, unobservable_group
 from .wander import estimate_bias_wander
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
@@ -74,6 +75,7 @@ class _Run:
     evidence: dict | None = None
     evidence_named: bool = False
     notes: list[str] = dataclasses.field(default_factory=list)
+    left_out: dict = dataclasses.field(default_factory=dict)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -188,6 +190,30 @@ def _observable_graph(run: _Run) -> ResidualGraph:
                    f"{', '.join(partners)}): left at {GROUPS[key].prior:g}")
         run.warnings.append(message)
         run.say(message)
+        graph = run.build(model_names(run.groups))
+    if run.model in ("extended", "auto"):
+        graph = _separable_graph(run, graph)
+    return graph
+
+
+def _separable_graph(run: _Run, graph: ResidualGraph) -> ResidualGraph:
+    """Stage 2b: ``extended`` and ``auto`` mean what the schedule determines: an extra group it cannot separate
+    from one of the 21 (:func:`.selection.inseparable_group`) would only blur that parameter, so it is left at
+    its prior, with a note naming it, its partner and what a schedule needs to separate it."""
+    while len(graph.names) > N_PARAMS:
+        found = inseparable_group(graph, quick_weights(graph, run.noise_plan.model, run.rec.dt, True,
+                                                       run.noise_plan.motions))
+        if found is None:
+            break
+        key, partner, correlation = found
+        group = GROUPS[key]
+        note = (f"{group.label} ({key}) left out of the {run.model} model: this schedule cannot separate it from "
+                f"{partner} (correlation {correlation:.4f}), whose sigma it would multiply by "
+                f"{1.0 / np.sqrt(max(1.0 - correlation**2, 1e-300)):.3g}; a schedule with {group.separated_by} "
+                "separates it")
+        run.left_out[key] = {"parameter": partner, "correlation": correlation, "note": note}
+        run.groups = tuple(g for g in run.groups if g != key)
+        run.say(note)
         graph = run.build(model_names(run.groups))
     return graph
 
@@ -357,7 +383,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     details = NlpDetails(stats["return_status"], int(stats["iter_count"]), fit.gls_steps, fit.use_rotation_steps,
                          fit.rotation_step_ratio, offsets, start_attitudes, groups_in(names), run.selection,
                          run.observe_s, run.static_step_s, timings["graph"], graph.observations,
-                         fit.whitened_residuals, white)
+                         fit.whitened_residuals, white, run.left_out)
     status, message = outcome(warnings, int(stats["iter_count"]))
     return CalibrationResult(
         params, "nlp", True, status, message,

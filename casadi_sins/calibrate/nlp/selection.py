@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...model.registry import DROP_ORDER, GROUPS, MODELS, groups_in, model_names
+from ...model.parameters import CORRELATION_LIMIT
+from ...model.registry import DROP_ORDER, GROUPS, MODELS, NAMES, groups_in, model_names
 from .graph import ResidualGraph
 from .ipopt import RANK_TOLERANCE
 
@@ -42,6 +43,36 @@ def unobservable_group(graph: ResidualGraph, weights) -> tuple[str, list[str]] |
         if key in present:
             members = set(GROUPS[key].names)
             return key, [n for n, i in zip(names, involved) if i and n not in members]
+    return None
+
+
+def inseparable_group(graph: ResidualGraph, weights) -> tuple[str, str, float] | None:
+    """The first extra group (in :data:`model.registry.DROP_ORDER`) the schedule cannot separate from one of
+    the 21: ``(group, parameter of the 21, correlation)``; ``None`` when every group is separated.
+
+    A group is inseparable when, with the rest of the model, it explains a parameter of the 21 by more than
+    :data:`model.parameters.CORRELATION_LIMIT` (its multiple correlation, from the predicted covariance of the
+    weighted Jacobian at the reference): that parameter's sigma then grows more than sevenfold, e.g. the gyro
+    scale asymmetry under turns of one sense per axis, one with the scale factor.
+    """
+    jac = weights @ np.asarray(graph.jacobian(np.zeros(graph.n_variables))[1])
+    information = jac.T @ jac
+    names = graph.variable_names()
+    every = np.arange(len(names))
+    covariance = np.linalg.pinv(information)  # a rank the schedule lacks elsewhere is not this question
+    core = [i for i, name in enumerate(names) if name in NAMES]
+    for key in DROP_ORDER:
+        members = {i for i, name in enumerate(names) if name in GROUPS[key].names}
+        if not members:
+            continue
+        rest = np.array([i for i in every if i not in members])
+        without = np.linalg.pinv(information[np.ix_(rest, rest)])
+        position = {i: k for k, i in enumerate(rest)}
+        explained = [1.0 - without[position[i], position[i]] / covariance[i, i] for i in core]
+        worst = int(np.argmax(explained))
+        correlation = float(np.sqrt(max(explained[worst], 0.0)))
+        if correlation > CORRELATION_LIMIT:
+            return key, names[core[worst]], correlation
     return None
 
 

@@ -67,6 +67,8 @@ class ParameterGroup:
     weak_level : float
         A 1-sigma above this (natural units) means the schedule does not determine the parameter: about
         1 % of what is known of it before any calibration (a navigation-grade unit's rough values).
+    separated_by : str
+        What a schedule needs to separate the group from the 21 (named when ``extended`` leaves it out).
     """
 
     key: str
@@ -92,6 +94,7 @@ class ParameterGroup:
     needs_rotation_steps: bool = False
     drop_rank: int | None = None
     weak_level: float = 5.0
+    separated_by: str = "turns about every axis"
 
 
 def axes(prefix: str, suffixes=("x", "y", "z")) -> tuple[str, ...]:

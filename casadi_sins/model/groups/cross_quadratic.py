@@ -39,4 +39,5 @@ def truth(nodes, values: dict) -> np.ndarray:
 GROUP = ParameterGroup("cross_quadratic", "accel cross-quadratic terms", NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
                        core=False, regressors=("P2",), correction=correction, truth=truth,
                        needs_rotation_steps=True, drop_rank=4,
+                       separated_by="turns that carry gravity across two accelerometer axes (about horizontal axes)",
                        meaning="k_ij of accelerometer i: its output gains k_ij a_i a_j (j the other axis)")

@@ -35,6 +35,6 @@ def c_terms(values: dict, k_g_inv) -> list:
 
 GROUP = ParameterGroup("gyro_asym", "gyro scale-factor asymmetry", NAMES, "ratio", "ppm", PPM, sensor="gyro",
                        core=False, correction=correction, truth=truth, c_terms=c_terms, needs_rotation_steps=True,
-                       drop_rank=5, weak_level=1.0,
+                       drop_rank=5, weak_level=1.0, separated_by="turns of both senses about every axis",
                        meaning="A_i: gyro i outputs A_i |w_i| more (its scale factor is 1 + A_i larger for positive "
                                "than for negative rates, 1 - A_i)")

@@ -48,4 +48,5 @@ def c_terms(values: dict, k_g_inv) -> list:
 GROUP = ParameterGroup("gyro_gsens", "gyro g-sensitivity", NAMES, "rad/s/(m/s^2)", "deg/h/g", DEG_PER_H / G0,
                        sensor="gyro", core=False, correction=correction, truth=truth, psins=psins, c_terms=c_terms,
                        drop_rank=6, weak_level=0.01,
+                       separated_by="static positions with every axis up and down, and horizontal",
                        meaning="G_ij: gyro i outputs G_ij f_j more for the body specific force f (axis j)")

@@ -62,7 +62,7 @@ GROUP = ParameterGroup("lever", "accel lever arms across the sensing axes (size 
                        meaning="position of the x and y accelerometers relative to the z accelerometer (the navigation "
                                "point), across their sensing axes; each senses w_dot x p + w x (w x p) along its axis")
 ALONG_GROUP = ParameterGroup("lever_along", "accel lever arms along the sensing axes", ALONG, "m", "mm", 1e-3,
-                             drop_rank=0, **_COMMON,
+                             drop_rank=0, separated_by="turns about two axes at once", **_COMMON,
                              meaning="position of the x (y) accelerometer along its own axis: seen only through the "
                                      "centripetal term, -(w_y^2 + w_z^2) p_x; single-axis turns make it one with the "
                                      "time offset")

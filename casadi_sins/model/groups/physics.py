@@ -37,6 +37,17 @@ class Nodes:
         return np.einsum("nj,nj...->n...", self.weights, values)
 
 
+def quadrature_nodes(kinematics, t0: np.ndarray, t1: np.ndarray, shift: float = 0.0, nodes: int = 6) -> Nodes:
+    """The Gauss-Legendre nodes of the samples ``[t0, t1]`` (``nodes`` each), moved ``shift`` s later, with the
+    motion there (``kinematics(t) -> (C_b^n, w_b, w_dot_b, f_b)``); what the accelerometers sense is the force.
+    ``nodes.integral(nodes.rate)`` and ``nodes.integral(nodes.force)`` are the true increments."""
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    points = t0[:, None] + (t1 - t0)[:, None] * (1.0 + x[None, :]) / 2.0 + shift
+    weights = (t1 - t0)[:, None] * w[None, :] / 2.0
+    _, rate, rate_dot, force = kinematics(points)
+    return Nodes(weights, rate, rate_dot, force, force)
+
+
 def sensed_outputs(kinematics, t0: np.ndarray, t1: np.ndarray, values: dict, groups, nodes: int = 6):
     """What the extra groups make of each sample ``[t0, t1]``: ``(dv_f, gyro_extra, accel_extra)``.
 
@@ -45,13 +56,10 @@ def sensed_outputs(kinematics, t0: np.ndarray, t1: np.ndarray, values: dict, gro
     ``dv_f`` (N, 3) is the specific-force increment at the (shifted) nodes, the others what the groups add
     to the gyro and accelerometer outputs ``K x + B dt`` (SI increments, (N, 3) each).
     """
-    x, w = np.polynomial.legendre.leggauss(nodes)
     own = {g.key: {n: values[n] for n in g.names if n in values} for g in groups}  # each group its own names
     tau = sum(float(g.shift(own[g.key])) for g in groups if g.shift is not None)
-    points = t0[:, None] + (t1 - t0)[:, None] * (1.0 + x[None, :]) / 2.0 + tau
-    weights = (t1 - t0)[:, None] * w[None, :] / 2.0
-    _, rate, rate_dot, force = kinematics(points)
-    at = Nodes(weights, rate, rate_dot, force, force)
+    at = quadrature_nodes(kinematics, t0, t1, tau, nodes)
+    force = at.force
     sensed = force.copy()
     for g in groups:
         if g.acceleration is not None:

@@ -31,4 +31,5 @@ def psins(values: dict, k_g_inv) -> dict:
 
 GROUP = ParameterGroup("quadratic", "accel quadratic scale", NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
                        core=False, regressors=("Q2",), correction=correction, truth=truth, psins=psins, drop_rank=3,
+                       separated_by="static positions with every accelerometer axis vertical and horizontal",
                        meaning="k2 of each accelerometer: its output is a + k2 a^2 for the sensed specific force a")

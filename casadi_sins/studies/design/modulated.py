@@ -51,7 +51,8 @@ class ModulatedNavigation:
         self.site = M.check_site(problem.site)
         self.scheme, self.hours = scheme, hours
         self.gyro_arw, self.accel_vrw = white_noise_densities(problem)
-        self.propagation = propagate(scheme, self.site, hours, self.gyro_arw, self.accel_vrw, step_deg, max_step_s)
+        self.propagation = propagate(scheme, self.site, hours, self.gyro_arw, self.accel_vrw, step_deg, max_step_s,
+                                     names=NAMES)
 
     def __call__(self, nominal: np.ndarray, covariance: np.ndarray) -> float:
         """Largest horizontal position error (m, 1 sigma) with the 21 parameters' ``covariance`` (SI) about

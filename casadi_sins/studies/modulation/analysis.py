@@ -6,7 +6,8 @@ Definitions (every number is 1 sigma):
   ``dlon (R_N + h) cos L``; both in m.
 * horizontal position error: ``sqrt(P_NN + P_EE)`` (the DRMS); velocity error likewise of ``dv_E, dv_N``.
 * a source's maximum position error: the largest horizontal position error of that source alone over the
-  run; its ratio to strapdown divides by the same source's under the strapdown scheme.
+  run; its ratio to strapdown divides by the same source's under the strapdown scheme (none where that
+  rounds to zero in the outputs, below :data:`ZERO_M`: an aligned strapdown IMU cancels some terms).
 * residual drift: the equivalent constant navigation-frame gyro drift a period leaves of 1 sigma of each
   gyro term (:func:`residual.equivalent_drift`), deg/h.
 """
@@ -25,9 +26,12 @@ from . import model as M
 from .covariance import Propagation, propagate
 from .residual import equivalent_drift
 from .schemes import CLOSURE_TOL, Scheme, closure_error, load_scheme
-from .sources import GROUPS, NOISES, Sources
+from .sources import NOISES, Sources
 from .tilt import mean_tilt_table
 
+#: A strapdown contribution below this (m) rounds to zero in the outputs: no ratio is formed with it (the
+#: alignment cancels some terms to rounding, e.g. an east accelerometer bias on a level IMU).
+ZERO_M = 5e-4
 #: The reference of every ratio: an IMU that never turns.
 STRAPDOWN = Scheme("strapdown", (), np.eye(3), description="reference: the IMU never turns (x E, y N, z U)",
                    source="built in")
@@ -44,7 +48,7 @@ class SchemeResult:
     total : ndarray (T, 4, 4)
         Covariance of (v_E, v_N, north, east) with every source (correlations kept).
     by_source : dict of str -> ndarray (T, 4, 4)
-        Each source alone (:data:`sources.SOURCES`).
+        Each source alone (:meth:`sources.Sources.groups` and the two noises).
     by_parameter : dict of str -> ndarray (T, 2)
         Each state's 1-sigma north and east position error, m.
     seconds : float
@@ -88,13 +92,14 @@ def run_scheme(scheme: Scheme, sources: Sources, site: Site, hours: float, step_
         Largest turn sub-step (deg) and output interval in a dwell (s), :func:`covariance.propagate`.
     """
     start = time.perf_counter()
-    prop = propagate(scheme, site, hours, sources.gyro_arw, sources.accel_vrw, step_deg, max_step_s)
-    by_source = {g: prop.covariance(sources.group_covariance(g), noises=()) for g in GROUPS}
+    prop = propagate(scheme, site, hours, sources.gyro_arw, sources.accel_vrw, step_deg, max_step_s,
+                     names=sources.names)
+    by_source = {g: prop.covariance(sources.group_covariance(g), noises=()) for g in sources.groups()}
     by_source.update({name: prop.noise[name] for name in NOISES})
     sigma = np.sqrt(np.clip(np.diag(sources.p0), 0.0, None))
     columns = sources.initial_map() * sigma  # each independent state's 1-sigma initial error (through any alignment)
-    pos = prop.sensitivity[:, 2:4, :] @ columns  # (T, 2, 31)
-    by_parameter = {name: np.abs(pos[:, :, i]) for i, name in enumerate(M.STATE_NAMES) if sigma[i] > 0}
+    pos = prop.sensitivity[:, 2:4, :] @ columns  # (T, 2, states)
+    by_parameter = {name: np.abs(pos[:, :, i]) for i, name in enumerate(sources.state_names) if sigma[i] > 0}
     total = prop.covariance(sources.initial_covariance)
     return SchemeResult(scheme, prop, total, by_source, by_parameter, time.perf_counter() - start)
 
@@ -104,7 +109,7 @@ def _max(a: np.ndarray) -> float:
 
 
 def _ratio(value: float, reference: float) -> float | None:
-    return None if reference <= 0.0 else value / reference
+    return None if reference < ZERO_M else value / reference
 
 
 def envelope(time_h: np.ndarray, curves: dict[str, np.ndarray], points: int = 600) -> dict:
@@ -121,10 +126,10 @@ def envelope(time_h: np.ndarray, curves: dict[str, np.ndarray], points: int = 60
 
 def residual_drift(scheme: Scheme, sources: Sources, site: Site) -> dict[str, list[float]]:
     """Equivalent constant drift (E, N, U, deg/h) each gyro term's 1 sigma leaves per period."""
-    drift = equivalent_drift(scheme, site, "total")
-    sigma = np.sqrt(np.clip(np.diag(sources.p0), 0.0, None))[M.SENSOR]
+    drift = equivalent_drift(scheme, site, "total", sources.names)
+    sigma = np.sqrt(np.clip(np.diag(sources.p0), 0.0, None))[M.N_NAV:]
     out = {}
-    for j, name in enumerate(M.STATE_NAMES[M.N_NAV:]):
+    for j, name in enumerate(sources.names):
         if name.startswith("gyro") and sigma[j] > 0:
             out[name] = (drift[:, j] * sigma[j] / units.DEG_PER_H).round(9).tolist()
     return out
@@ -155,8 +160,8 @@ def summarise(result: SchemeResult, reference: SchemeResult, sources: Sources, s
                      "ratio_to_strapdown": v["ratio_to_strapdown"],
                      "share_of_total": round(v["max_position_error_m"] / total_max, 4)}
                     for n, v in sorted(by_parameter.items(), key=lambda item: -item[1]["max_position_error_m"])
-                    if n not in M.NAV_NAMES and v["ratio_to_strapdown"] is not None
-                    and v["ratio_to_strapdown"] >= 0.5 and v["max_position_error_m"] >= 0.01 * total_max]
+                    if n not in M.NAV_NAMES and (v["ratio_to_strapdown"] is None or v["ratio_to_strapdown"] >= 0.5)
+                    and v["max_position_error_m"] >= 0.01 * total_max]
     mean = result.propagation.mean(sources.values())  # every source at +1 sigma, noise-free
     curves = {"longitude_error_m": np.sqrt(tot[:, 3, 3]), "latitude_error_m": np.sqrt(tot[:, 2, 2])}
     for name, cov in result.by_source.items():
@@ -224,8 +229,11 @@ def analyse(schemes: list[Scheme], sources: Sources, site: Site, hours: float, s
             "longitude_error_m": "east position error dlon (R_N + h) cos L",
             "latitude_error_m": "north position error dL (R_M + h)",
             "max_horizontal_position_error_m": "max over time of sqrt(P_NN + P_EE)",
-            "ratio_to_strapdown": "the source's max position error under the scheme / under strapdown",
-            "not_averaged_away": "sensor error terms whose contribution is at least half their strapdown one "
+            "ratio_to_strapdown": "the source's max position error under the scheme / under strapdown (null where "
+                                  "the strapdown one rounds to zero, below 0.5 mm: an aligned strapdown IMU cancels "
+                                  "some terms)",
+            "not_averaged_away": "sensor error terms whose contribution is at least half their strapdown one (or "
+                                 "that strapdown cancels) "
                                  "and at least 1 % of the scheme's total: the ones to calibrate best",
             "residual_drift_deg_h_per_sigma": "constant E, N, U gyro drift one period leaves of 1 sigma",
             "period_mean_tilt": "mean attitude error (E, N, U, arcsec) over the first period of 1 sigma of each "

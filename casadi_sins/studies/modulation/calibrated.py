@@ -10,9 +10,10 @@ column, or the full covariance when one is known:
 
 Either must be symmetric, positive semi-definite and have the table's sigma as its diagonal root.
 Scale-factor errors are relative (``t_ii``), so the covariance of the values is divided by the values
-(as :mod:`casadi_sins.studies.budget` does).  A table's gyro scale-factor asymmetry
-(``gyro_scale_asym_*``, the same term) is the model's ``dK*``; its other extra groups are not in the
-modulation model and are left out (named in the origin).
+(:func:`casadi_sins.model.registry.relative_covariance`, as the budget does).  Every group of the table
+is a source (the error model is the package's one, :mod:`casadi_sins.nav.errorinputs`): the gyro
+g-sensitivity and scale asymmetry, the accelerometer quadratic scale, lever arms and time offset as the
+21.
 """
 
 from __future__ import annotations
@@ -27,10 +28,9 @@ import numpy as np
 from ...core.errors import InputError, shown
 from ...core.inputs import check_input_file
 from ...data.tables import read_table
-from ...model.groups.gyro_asym import NAMES as ASYMMETRY
-from ...model.registry import NAMES, relative_mask
+from ...model.registry import NAMES, error_scale, groups_in, model_names, relative_covariance
 from ...report.calibration import companion_paths
-from . import model as M
+from .model import N_NAV
 from .sources import Sources
 
 #: A covariance CSV or report of a few dozen parameters is small.
@@ -172,13 +172,11 @@ def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sourc
         if not np.allclose(np.sqrt(np.diag(cov))[: len(NAMES)], params.sigma[: len(NAMES)], rtol=1e-3, atol=0.0):
             raise InputError(where, f"its diagonal does not match the sigma of {table}")
     zero = np.zeros(3)
-    left = [n for n in names[len(NAMES):] if n not in NAMES + tuple(ASYMMETRY)]
-    extra = f" (extra groups left out: {', '.join(left)})" if left else ""
     try:
         return parameter_sources(names, params.values, cov, zero if sheet is None else sheet.gyro_arw,
                                  zero if sheet is None else sheet.accel_vrw, sheet, name=table.stem,
                                  correlated=where is not None,
-                                 origin=str(table) + (f" + {where}" if where is not None else "") + extra)
+                                 origin=str(table) + (f" + {where}" if where is not None else ""))
     except ValueError as exc:
         raise InputError(table, str(exc)) from None
 
@@ -187,25 +185,27 @@ def parameter_sources(names, values: np.ndarray, covariance: np.ndarray, gyro_ar
                       accel_vrw: np.ndarray, sheet: Sources | None = None, name: str = "calibration",
                       correlated: bool = True, origin: str = "") -> Sources:
     """Residual errors of parameters ``names`` with ``values`` and ``covariance`` (SI) as the modulation's
-    error sources: the 21 and the gyro scale asymmetry kept (other extra groups are not in its model),
-    scale factors made relative, the white noise ``gyro_arw`` (rad/sqrt(s)) and ``accel_vrw``
-    (m/s/sqrt(s)), the initial errors of ``sheet`` (none without one).
+    error sources: every group of the registry they hold is a state (the 21, then the extra groups, with the
+    sheet's where the table has none), scale factors made relative (:func:`model.registry.relative_covariance`),
+    the white noise ``gyro_arw`` (rad/sqrt(s)) and ``accel_vrw`` (m/s/sqrt(s)), the initial errors of ``sheet``
+    (none without one).
 
     Raises
     ------
     ValueError
         If a scale factor is zero (its relative error is undefined).
     """
-    names = tuple(names)
-    kept = NAMES + tuple(n for n in ASYMMETRY if n in names)  # the table's asymmetry is the model's dK*
-    idx = [names.index(n) for n in kept]
-    values, cov = np.asarray(values, float)[idx], np.asarray(covariance, float)[np.ix_(idx, idx)]
-    scale = np.where(relative_mask(kept), np.abs(values), 1.0)
-    if np.any(scale == 0):
+    names, values = tuple(names), np.asarray(values, float)
+    if np.any(error_scale(names, values) == 0):
         raise ValueError("a scale factor of zero")
-    p0 = np.zeros((M.N_STATE, M.N_STATE)) if sheet is None else sheet.p0.copy()
-    states = list(range(M.N_NAV, M.N_NAV + len(NAMES))) + list(range(M.GYRO_ASYM.start, M.GYRO_ASYM.stop))
-    states = states[:len(kept)]
-    p0[np.ix_(states, states)] = cov / np.outer(scale, scale)
+    sheet_names = () if sheet is None else sheet.names
+    state_names = model_names(groups_in(names + tuple(sheet_names)))
+    n = N_NAV + len(state_names)
+    p0 = np.zeros((n, n))
+    if sheet is not None:
+        where = list(range(N_NAV)) + [N_NAV + state_names.index(s) for s in sheet_names]
+        p0[np.ix_(where, where)] = sheet.p0
+    idx = [N_NAV + state_names.index(s) for s in names]
+    p0[np.ix_(idx, idx)] = relative_covariance(names, values, covariance)
     return Sources(name, p0, np.asarray(gyro_arw, float), np.asarray(accel_vrw, float), correlated=correlated,
-                   origin=origin)
+                   origin=origin, names=state_names)

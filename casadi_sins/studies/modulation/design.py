@@ -30,7 +30,7 @@ from ...core.earth import Site
 from ...core.errors import InputError
 from . import model as M
 from .covariance import check_run
-from .schemes import Piece, Scheme, Step
+from .schemes import Scheme, Step, still, turn
 from .sources import Sources
 from .tilt import mean_radius, piece_moments
 
@@ -97,7 +97,7 @@ def check_request(req: Request, sources: Sources, site: Site) -> None:
     if req.hours * 3600.0 < req.positions * req.step_s:
         raise InputError(None, f"the run ({req.hours:g} h) is shorter than one period ({req.positions} x "
                          f"{req.step_s:g} s): nothing to average")
-    sensor = sources.p0[M.SENSOR, M.SENSOR]
+    sensor = sources.p0[M.N_NAV:, M.N_NAV:]
     if not np.any(np.diag(sensor) > 0):
         raise InputError(sources.origin or sources.name, "the errors have no gyro or accelerometer terms: there is "
                          "nothing for a rotation scheme to modulate (give bias, scale or misalignment sigmas)")
@@ -133,26 +133,28 @@ class Tables:
 
 
 def error_root(sources: Sources) -> np.ndarray:
-    """``S`` (24, K) with ``S S^T`` the sensor errors' covariance (its non-zero eigen-directions)."""
-    lam, vec = np.linalg.eigh(sources.p0[M.SENSOR, M.SENSOR])
+    """``S`` (n, K) with ``S S^T`` the sensor errors' covariance (its non-zero eigen-directions)."""
+    lam, vec = np.linalg.eigh(sources.p0[M.N_NAV:, M.N_NAV:])
     keep = lam > 1e-12 * lam.max()
     return vec[:, keep] * np.sqrt(lam[keep])
 
 
-def step_tables(req: Request, site: Site, axes: tuple[str, ...], root: np.ndarray) -> Tables:
-    """The weighted moments of every (attitude, choice) step, and of a still start (per second)."""
+def step_tables(req: Request, site: Site, axes: tuple[str, ...], root: np.ndarray,
+                names=M.SHEET_NAMES) -> Tables:
+    """The weighted moments of every (attitude, choice) step, and of a still start (per second); ``names`` the
+    parameters of the sensor states (:attr:`sources.Sources.names`)."""
     chosen = choices(axes)
     shape = (4, len(chosen), 3, root.shape[1])
     gyro, first, accel = np.zeros(shape), np.zeros(shape), np.zeros(shape)
     for att in range(4):
         for c, (axis, sense) in enumerate(chosen):
-            turn = Piece(0.0, math.pi / req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1], sense * req.rate)
-            g_t, w_t, a_t = piece_moments(turn, site)
-            g_d, w_d, a_d = piece_moments(Piece(0.0, req.stop, attitude(att ^ AXIS_BIT[axis])), site)
+            half = turn(0.0, math.pi / req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1], sense * req.rate)
+            g_t, w_t, a_t = piece_moments(half, site, names)
+            g_d, w_d, a_d = piece_moments(still(0.0, req.stop, attitude(att ^ AXIS_BIT[axis])), site, names)
             gyro[att, c] = (g_t + g_d) @ root
             first[att, c] = (w_t + req.stop * g_t + w_d) @ root
             accel[att, c] = (a_t + a_d) @ root
-    g0, _, a0 = piece_moments(Piece(0.0, 1.0, attitude(0)), site)
+    g0, _, a0 = piece_moments(still(0.0, 1.0, attitude(0)), site, names)
     return Tables(chosen, gyro, first, accel, g0 @ root, a0 @ root, np.array([AXIS_BIT[a] for a, _ in chosen]))
 
 
@@ -163,11 +165,12 @@ def responses(req: Request, site: Site, points: int = 48) -> np.ndarray:
     ``expm([[F, E], [0, 0]] t)`` (the drift enters ``phi' = -drift``)."""
     from ...core.linalg import expm
 
-    f = M.navigation_block(site)[:M.N_NAV, :M.N_NAV]
+    model = M.ErrorModel(site, ())
+    f = model.navigation[:M.N_NAV, :M.N_NAV]
     big = np.zeros((M.N_NAV + 3, M.N_NAV + 3))
     big[:M.N_NAV, :M.N_NAV] = f
     big[0:3, M.N_NAV:] = -np.eye(3)
-    scale = np.array([1.0, 1.0, *M.to_metres(site)])[:, None]
+    scale = np.array([1.0, 1.0, *model.to_metres()])[:, None]
     schuler = math.pi * math.sqrt(mean_radius(site) / site.g)
     times = np.unique(np.append(np.linspace(0.0, req.hours * 3600.0, points + 1)[1:], schuler))
     times = times[times <= req.hours * 3600.0]

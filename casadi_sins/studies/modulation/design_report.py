@@ -58,7 +58,8 @@ def comparison(result: Design, sources: Sources, site: Site) -> dict:
     velocity errors, and the period-mean tilt's prediction."""
     req, cache, rows = result.request, {}, {}
     for scheme in [result.scheme] + same_size_schemes(req.positions):
-        prop = propagate(scheme, site, req.hours, sources.gyro_arw, sources.accel_vrw, cache=cache)
+        prop = propagate(scheme, site, req.hours, sources.gyro_arw, sources.accel_vrw, cache=cache,
+                         names=sources.names)
         tilt = mean_tilt_table(scheme, sources, site)
         rows[scheme.name] = {
             "criterion": round(criterion_value(prop, sources, req.criterion), 6),

@@ -12,11 +12,10 @@ from typing import Callable
 import numpy as np
 
 from ...core.earth import Site
-from . import model as M
 from .covariance import Propagation, discretise
 from .design import (AXIS_BIT, INNER_AXES, PHASES, Request, attitude, check_request, choices, error_root,
                      local_search, neighbours, proxy, responses, step_tables)
-from .schemes import Piece, Scheme, Step
+from .schemes import Scheme, Step, still, turn
 from .sources import Sources
 
 #: A search space this small is enumerated whole (the single-axis one up to 17 positions).
@@ -82,19 +81,20 @@ class StepPropagator:
 
     def __init__(self, req: Request, sources: Sources, site: Site, axes: tuple, step_deg: float = 5.0):
         self.req, self.sources, self.site, self.axes = req, sources, site, axes
-        self.args = (site, M.navigation_block(site), sources.gyro_arw, sources.accel_vrw, step_deg)
+        self.model = sources.model(site)
+        self.args = (self.model, sources.gyro_arw, sources.accel_vrw, step_deg)
         self.noisy = bool(np.any(sources.gyro_arw > 0) or np.any(sources.accel_vrw > 0))
         self.steps, self.starts, self.bits = {}, {}, [AXIS_BIT[a] for a, _ in choices(axes)]
-        self.scale = np.array([1.0, 1.0, *M.to_metres(site)])[:, None]
+        self.scale = np.array([1.0, 1.0, *self.model.to_metres()])[:, None]
 
     def _step(self, att: int, c: int) -> tuple:
         """The turn and the stop of choice ``c`` from attitude ``att``, discretised on first use."""
         if (att, c) not in self.steps:
             axis, sense = choices(self.axes)[c]
-            turn = Piece(0.0, math.pi / self.req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1],
-                         sense * self.req.rate)
-            stop = Piece(0.0, self.req.stop, attitude(att ^ self.bits[c]))
-            self.steps[(att, c)] = ((discretise(turn, *self.args), turn.duration),
+            half = turn(0.0, math.pi / self.req.rate, attitude(att), np.eye(3)[AXIS_BIT[axis] - 1],
+                        sense * self.req.rate)
+            stop = still(0.0, self.req.stop, attitude(att ^ self.bits[c]))
+            self.steps[(att, c)] = ((discretise(half, *self.args), half.duration),
                                     (discretise(stop, *self.args), stop.duration))
         return self.steps[(att, c)]
 
@@ -109,9 +109,9 @@ class StepPropagator:
     def propagate(self, cand: Candidate) -> Propagation:
         """The sensitivities (and noise covariances) of one candidate over the run: one period's partial
         products, then a product per period (the candidate returns to its start)."""
-        period, rows, n = self._period(cand.seq), slice(3, 7), M.N_STATE
+        period, rows, n = self._period(cand.seq), slice(3, 7), self.model.n_state
         if cand.dwell0 not in self.starts:
-            self.starts[cand.dwell0] = (discretise(Piece(0.0, cand.dwell0, attitude(0)), *self.args)
+            self.starts[cand.dwell0] = (discretise(still(0.0, cand.dwell0, attitude(0)), *self.args)
                                         if cand.dwell0 > 0 else (np.eye(n), np.zeros((n, n)), np.zeros((n, n))))
         start = self.starts[cand.dwell0]
         pieces = ([(start, cand.dwell0)] if cand.dwell0 > 0 else []) + period
@@ -136,7 +136,7 @@ class StepPropagator:
 
     def _noise(self, first: list, period: list, count: int) -> np.ndarray:
         """(2, T, 4, 4) covariance of the gyro and the accelerometer noise at the same outputs."""
-        n, rows, outer = M.N_STATE, slice(3, 7), self.scale @ self.scale.T
+        n, rows, outer = self.model.n_state, slice(3, 7), self.scale @ self.scale.T
         out, p = np.zeros((2, count, 4, 4)), np.zeros((2, n, n))
         k = 1
         pieces = first + period * count
@@ -174,7 +174,7 @@ def _spaces(req: Request, sources: Sources, site: Site, samples: int, seed: int)
     root, response = error_root(sources), responses(req, site)
     out = []
     for axes in INNER_AXES[req.axes]:
-        tables = step_tables(req, site, axes, root)
+        tables = step_tables(req, site, axes, root, sources.names)
         out.append(_Space(axes, tables, _start_sequences(len(tables.choices), req.positions, samples,
                                                          np.random.default_rng(seed)), response))
     return out

@@ -32,7 +32,7 @@ from ...report.tables import markdown_table
 from ..parallel import run_all
 from .covariance import propagate
 from .schemes import Scheme
-from .sources import GROUPS, NOISES, Sources
+from .sources import NOISES, Sources
 from .timedomain import draw_errors, navigate
 
 
@@ -65,7 +65,8 @@ def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs
         The run's settings and, per group, ``sigma_max_m``, ``mc_rms_max_m`` and the ratios.
     """
     rng = np.random.default_rng(seed)
-    prop = propagate(scheme, site, hours, sources.gyro_arw, sources.accel_vrw, max_step_s=max_step_s)
+    prop = propagate(scheme, site, hours, sources.gyro_arw, sources.accel_vrw, max_step_s=max_step_s,
+                     names=sources.names)
     errors, labels = draw_errors(sources, runs, rng, matched)
     start = time.perf_counter()
     t, err, ref = navigate(scheme, site, hours, errors, rng, turn_step_deg, dwell_step_s, max_step_s, progress)
@@ -77,11 +78,12 @@ def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs
            "latitude_deg": round(float(np.degrees(site.latitude)), 9), "sources": sources.name,
            "turn_step_deg": turn_step_deg, "dwell_step_s": dwell_step_s, "navigation_s": round(nav_s, 2),
            "reference_run_max_error_m": float(np.hypot(ref[:, 2], ref[:, 3]).max()), "groups": {}}
-    for group in list(GROUPS) + list(NOISES):
+    groups = sources.groups()
+    for group in list(groups) + list(NOISES):
         idx = np.where(labels == group)[0]
         if len(idx) == 0:
             continue
-        cov = (prop.covariance(sources.group_covariance(group), noises=()) if group in GROUPS
+        cov = (prop.covariance(sources.group_covariance(group), noises=()) if group in groups
                else prop.noise[group])
         sig_p = np.sqrt(cov[:, 2, 2] + cov[:, 3, 3])
         sig_v = np.sqrt(cov[:, 0, 0] + cov[:, 1, 1])
@@ -96,7 +98,7 @@ def monte_carlo(scheme: Scheme, sources: Sources, site: Site, hours: float, runs
             "ratio_pooled": float(np.sqrt(np.sum(rms_p**2) / np.sum(sig_p**2))),
             "ratio_velocity_of_max": float(rms_v.max() / sig_v.max()),
         }
-        if group in GROUPS:  # the covariance of the very errors drawn: what is left is the model's
+        if group in groups:  # the covariance of the very errors drawn: what is left is the model's
             drawn = errors.x0[idx]
             c_d = prop.covariance(drawn.T @ drawn / len(idx), noises=())
             out["groups"][group]["ratio_given_draws"] = float(rms_p.max() / np.sqrt(c_d[:, 2, 2] + c_d[:, 3, 3]).max())

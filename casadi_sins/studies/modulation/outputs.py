@@ -67,8 +67,9 @@ def _scheme_section(name: str, s: dict) -> list[str]:
                      f"{_fmt(v['max_longitude_error_m'])} | {_fmt(v['max_latitude_error_m'])} |")
     kept = s["not_averaged_away"]
     lines += ["", "Not averaged away (at least half the strapdown contribution and 1 % of the total), largest "
-              "first: " + (", ".join(f"{v['name']} ({_fmt(v['max_position_error_m'])} m, "
-                                     f"{_fmt(v['ratio_to_strapdown'], 3)} x strapdown)" for v in kept)
+              "first: " + (", ".join(f"{v['name']} ({_fmt(v['max_position_error_m'])} m, " + (
+                  "none under strapdown)" if v["ratio_to_strapdown"] is None
+                  else f"{_fmt(v['ratio_to_strapdown'], 3)} x strapdown)") for v in kept)
                            if kept else "none") + "."]
     lines += _tilt_lines(s.get("period_mean_tilt"))
     drift = {k: v for k, v in s["residual_drift_deg_h_per_sigma"].items() if max(map(abs, v)) > 1e-7}

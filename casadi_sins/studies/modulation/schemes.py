@@ -20,7 +20,8 @@ IMU.
 
 A turn about a body-fixed axis ``u`` from attitude ``C0`` is exact: ``C(t) = C0 R(u, w t)`` and the
 IMU's rate relative to the base is ``w u`` in the body.  A turn about a base axis ``n`` is the same
-turn with ``u = C0^T n`` (``R(n, a) C0 = C0 R(C0^T n, a)``).
+turn with ``u = C0^T n`` (``R(n, a) C0 = C0 R(C0^T n, a)``).  The pieces of a run are the package's one
+description of motion, :class:`sim.motion.MotionPiece` (constant-rate turns and still pieces).
 """
 
 from __future__ import annotations
@@ -31,11 +32,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core import rotations, units
+from ...core import units
 from ...core.errors import InputError, shown
 from ...core.files import safe_stem
 from ...core.orientation import OrientationError, orientation_to_dcm
-from ...core.toml import array_table_lines, read_toml_text
+from ...core.toml import array_table_lines
+from ...sim.motion import MotionPiece
 from . import shipped
 
 #: The ``format`` key of a scheme file.
@@ -109,43 +111,14 @@ class Scheme:
         return sum(s.turn_s + s.dwell for s in self.steps) if self.steps else math.inf
 
 
-@dataclasses.dataclass(frozen=True)
-class Piece:
-    """One piece of the IMU motion: a dwell (``axis is None``) or a constant-rate turn.
+def still(t0: float, duration: float, attitude: np.ndarray) -> MotionPiece:
+    """A still piece of ``duration`` s at ``C_b^n`` from ``t0``."""
+    return MotionPiece(t0, t0 + duration, attitude)
 
-    Attributes
-    ----------
-    t0, duration : float
-        Start and length, s.
-    attitude : ndarray (3, 3)
-        ``C_b^n`` at ``t0``.
-    axis : ndarray (3,) or None
-        Unit turn axis in the body.
-    rate : float
-        Signed turn rate about ``axis``, rad/s.
-    """
 
-    t0: float
-    duration: float
-    attitude: np.ndarray
-    axis: np.ndarray | None = None
-    rate: float = 0.0
-
-    def attitude_at(self, tau) -> np.ndarray:
-        """``C(t0 + tau)`` (tau in [0, duration]), vectorised over ``tau``."""
-        tau = np.asarray(tau, dtype=float)
-        if self.axis is None:
-            return np.broadcast_to(self.attitude, tau.shape + (3, 3))
-        return self.attitude @ rotations.rotation_matrix(self.axis, self.rate * tau)
-
-    def table_rate(self) -> np.ndarray:
-        """Rate of the IMU relative to the base, in the body (constant over the piece), rad/s."""
-        return np.zeros(3) if self.axis is None else self.rate * self.axis
-
-    @property
-    def end_attitude(self) -> np.ndarray:
-        """``C_b^n`` at the end of the piece."""
-        return self.attitude_at(self.duration)
+def turn(t0: float, duration: float, attitude: np.ndarray, axis: np.ndarray, rate: float) -> MotionPiece:
+    """A turn from ``C_b^n`` about the body axis ``axis`` at the constant signed ``rate`` (rad/s) for ``duration``."""
+    return MotionPiece(t0, t0 + duration, attitude, axis, rate * duration, "constant")
 
 
 def _number(value, what: str, where: tuple, positive: bool) -> float:
@@ -236,12 +209,8 @@ def load_scheme(name_or_path) -> Scheme:
     InputError
         Naming the file (and the step and line) at fault, or listing the shipped schemes.
     """
-    path, is_shipped = shipped.find_file(name_or_path, "schemes", "scheme")
-    data, text = read_toml_text(path, "scheme file")
-    if data.get("format") != FORMAT:
-        raise InputError(path, f"format must be {FORMAT!r}, found {shown(data.get('format'))}")
-    scheme = parse_scheme(data, str(path), array_table_lines(text, "step"))
-    return dataclasses.replace(scheme, source=f"{path.stem} (shipped)" if is_shipped else str(path))
+    data, text, path, origin = shipped.read_file(name_or_path, "schemes", "scheme", FORMAT, "scheme file")
+    return dataclasses.replace(parse_scheme(data, str(path), array_table_lines(text, "step")), source=origin)
 
 
 def body_axis(step: Step, attitude: np.ndarray) -> np.ndarray:
@@ -251,17 +220,16 @@ def body_axis(step: Step, attitude: np.ndarray) -> np.ndarray:
     return attitude.T @ np.eye(3)[BASE_AXES[step.axis]]
 
 
-def period_pieces(scheme: Scheme, start: np.ndarray, t0: float = 0.0) -> list[Piece]:
+def period_pieces(scheme: Scheme, start: np.ndarray, t0: float = 0.0) -> list[MotionPiece]:
     """The pieces of one period from attitude ``start`` (turn, then dwell, per step)."""
     pieces, attitude, t = [], start, t0
     for step in scheme.steps:
         if step.angle != 0.0:
-            axis = body_axis(step, attitude)
-            turn = Piece(t, step.turn_s, attitude, axis, math.copysign(step.rate, step.angle))
-            pieces.append(turn)
-            attitude, t = turn.end_attitude, t + turn.duration
+            piece = turn(t, step.turn_s, attitude, body_axis(step, attitude), math.copysign(step.rate, step.angle))
+            pieces.append(piece)
+            attitude, t = piece.end_attitude, piece.t1
         if step.dwell > 0.0:
-            pieces.append(Piece(t, step.dwell, attitude))
+            pieces.append(still(t, step.dwell, attitude))
             t += step.dwell
     return pieces
 
@@ -303,20 +271,20 @@ def check_size(scheme: Scheme, duration: float, max_step_s: float = math.inf) ->
                          "short for so long a run (or the output step too small)")
 
 
-def scheme_pieces(scheme: Scheme, duration: float) -> list[Piece]:
+def scheme_pieces(scheme: Scheme, duration: float) -> list[MotionPiece]:
     """All pieces over ``[0, duration]``: the initial dwell, then the period repeated, the last piece cut.
 
     A scheme that closes repeats the same attitudes exactly (no round-off creeps in over days); one that
     does not continues from where the last period ended.
     """
     check_size(scheme, duration)
-    pieces: list[Piece] = []
+    pieces: list[MotionPiece] = []
     t = 0.0
     if not scheme.steps:
-        return [Piece(0.0, duration, scheme.start)]
+        return [still(0.0, duration, scheme.start)]
     if scheme.initial_dwell > 0.0:
-        pieces.append(Piece(0.0, min(scheme.initial_dwell, duration), scheme.start))
-        t = pieces[-1].duration
+        pieces.append(still(0.0, min(scheme.initial_dwell, duration), scheme.start))
+        t = pieces[-1].t1
     closes = closure_error(scheme) < CLOSURE_TOL
     template = period_pieces(scheme, scheme.start)
     attitude = scheme.start
@@ -327,7 +295,8 @@ def scheme_pieces(scheme: Scheme, duration: float) -> list[Piece]:
             start = piece.t0 + offset
             if start >= duration - 1e-9:
                 break
-            pieces.append(dataclasses.replace(piece, t0=start, duration=min(piece.duration, duration - start)))
-        t = pieces[-1].t0 + pieces[-1].duration
+            moved = piece.shifted(offset)
+            pieces.append(moved if moved.t1 <= duration else moved.part(moved.t0, duration))
+        t = pieces[-1].t1
         attitude = period[-1].end_attitude
     return pieces

@@ -11,7 +11,8 @@ import re
 from importlib import resources
 from pathlib import Path
 
-from ...core.errors import InputError
+from ...core.errors import InputError, shown
+from ...core.toml import read_toml_text
 
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
@@ -62,3 +63,32 @@ def find_file(name_or_path, kind: str, what: str) -> tuple[Path, bool]:
     if candidate.is_file() and text in shipped_names(kind):
         return candidate, True
     raise InputError(text, f"no such {what} file or shipped {what} (shipped: {', '.join(shipped_names(kind))})")
+
+
+def read_file(name_or_path, kind: str, what: str, file_format: str, label: str) -> tuple[dict, str, Path, str]:
+    """A file a user named (:func:`find_file`) read as TOML, its ``format`` checked.
+
+    Parameters
+    ----------
+    name_or_path, kind, what
+        As :func:`find_file`.
+    file_format : str
+        The ``format`` key the file must have.
+    label : str
+        What the file is when read ("scheme file", "error sheet").
+
+    Returns
+    -------
+    (dict, str, Path, str)
+        Its data, its text, its path and where it came from (``NAME (shipped)`` or the path).
+
+    Raises
+    ------
+    InputError
+        Naming the file when it cannot be found or read or has another format.
+    """
+    path, is_shipped = find_file(name_or_path, kind, what)
+    data, text = read_toml_text(path, label)
+    if data.get("format") != file_format:
+        raise InputError(path, f"format must be {file_format!r}, found {shown(data.get('format'))}")
+    return data, text, path, f"{path.stem} (shipped)" if is_shipped else str(path)

@@ -20,10 +20,12 @@ Error sheet (``format = "casadi-sins-errors/1"``)::
     misalignment_arcsec = 3.0  # scalar or the 3 of T_a: [yx, zx, zy]
     noise_ug_sqrt_hz = 5.0     # velocity random walk
 
-Every value is the sigma of a zero-mean error, independent of every other one.  The sources of the
-split are the groups below (:data:`GROUPS`); a calibrated table (:mod:`.calibrated`) replaces the six
-sensor groups by its sigma and, when known, its full covariance (then correlated across groups: kept
-in the total, Guan et al. 2023, eqs. 20-30).
+Every value is the sigma of a zero-mean error, independent of every other one.  The sheet's terms are the
+registry's groups (:mod:`casadi_sins.model.registry`, their natural units): the 21 and the gyro scale
+asymmetry (``gyro_scale_asym_*``).  The sources of the split (:meth:`Sources.groups`) are the initial
+attitude and every registry group the errors hold; a calibrated table (:mod:`.calibrated`) brings its own
+groups, its sigma and, when known, its full covariance (then correlated across groups: kept in the total,
+Guan et al. 2023, eqs. 20-30).
 """
 
 from __future__ import annotations
@@ -37,71 +39,69 @@ import numpy as np
 from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError, shown
-from ...core.toml import read_toml
 from ...model import registry
-from . import model as M
+from .model import N_NAV, NAV_NAMES, PHI, SHEET_NAMES, ErrorModel
 from . import shipped
 
 #: The ``format`` key of an error sheet.
 FORMAT = "casadi-sins-errors/1"
-
-def _registry_groups(sensor: str) -> dict[str, list[int]]:
-    """The paper's groups of one sensor with their labels and states, from the registry
-    (:data:`casadi_sins.model.registry.GROUPS`), in its order."""
-    out = {}
-    for key in registry.CORE_GROUPS:
-        group = registry.GROUPS[key]
-        if group.sensor == sensor:
-            first = M.N_NAV + registry.NAMES.index(group.names[0])
-            out[group.label] = list(range(first, first + len(group.names)))
-    return out
-
-
-#: The independent sources and their states: the initial attitude, the gyro's groups, its scale asymmetry
-#: (the registry's ``gyro_asym``, a state of its own here), the accelerometer's groups.
-GROUPS = {
-    "initial level": [0, 1],
-    "initial heading": [2],
-    **_registry_groups("gyro"),
-    "gyro scale asymmetry": list(range(M.GYRO_ASYM.start, M.GYRO_ASYM.stop)),
-    **_registry_groups("accel"),
-}
+#: The sources of the initial attitude: their states.
+INITIAL = {"initial level": [0, 1], "initial heading": [2]}
 NOISES = ("gyro noise", "accel noise")
-SOURCES = tuple(GROUPS) + NOISES
-#: (section, key, states or count, SI per natural unit)
+#: (section, key) of a sheet -> the registry group it gives, or (states of the initial attitude or noise
+#: count, SI per natural unit).
 SHEET_KEYS = {
-    ("initial", "level_arcsec"): ([0, 1], units.ARCSEC),
-    ("initial", "heading_arcmin"): ([2], 60 * units.ARCSEC),
-    ("gyro", "bias_deg_h"): (GROUPS["gyro bias"], units.DEG_PER_H),
-    ("gyro", "scale_ppm"): (GROUPS["gyro scale"], units.PPM),
-    ("gyro", "misalignment_arcsec"): (GROUPS["gyro misalignment"], units.ARCSEC),
-    ("gyro", "asymmetry_ppm"): (GROUPS["gyro scale asymmetry"], units.PPM),
-    ("accel", "bias_ug"): (GROUPS["accel bias"], units.UG),
-    ("accel", "scale_ppm"): (GROUPS["accel scale"], units.PPM),
-    ("accel", "misalignment_arcsec"): (GROUPS["accel misalignment"], units.ARCSEC),
+    ("initial", "level_arcsec"): (INITIAL["initial level"], units.ARCSEC),
+    ("initial", "heading_arcmin"): (INITIAL["initial heading"], 60 * units.ARCSEC),
+    ("gyro", "bias_deg_h"): "gyro_bias",
+    ("gyro", "scale_ppm"): "gyro_scale",
+    ("gyro", "misalignment_arcsec"): "gyro_misalign",
+    ("gyro", "asymmetry_ppm"): "gyro_asym",
+    ("accel", "bias_ug"): "accel_bias",
+    ("accel", "scale_ppm"): "accel_scale",
+    ("accel", "misalignment_arcsec"): "accel_misalign",
     ("gyro", "noise_deg_sqrt_h"): (3, units.ARW_UNIT),
     ("accel", "noise_ug_sqrt_hz"): (3, units.VRW_UNIT),
 }
 
 
+def _states(names, key: str) -> list[int]:
+    """The states of a registry group's parameters among ``names`` (after the navigation errors)."""
+    return [N_NAV + i for i, n in enumerate(names) if n in registry.GROUPS[key].names]
+
+
+def source_groups(names) -> dict[str, list[int]]:
+    """The independent sources of an error state of the parameters ``names`` and their states: the initial
+    attitude, then each registry group present, the gyro's before the accelerometer's (registry order)."""
+    out = dict(INITIAL)
+    for sensor in ("gyro", "accel"):
+        for key, group in registry.GROUPS.items():
+            if group.sensor == sensor and _states(names, key):
+                out[group.label] = _states(names, key)
+    return out
+
+
 @dataclasses.dataclass
 class Sources:
-    """Covariance of the independent initial errors (31 states, SI), the white-noise densities, and
-    optionally the map of an alignment: the initial state is ``transform @ x`` (``x ~ p0``).
+    """Covariance of the independent initial errors (SI), the white-noise densities, and optionally the map
+    of an alignment: the initial state is ``transform @ x`` (``x ~ p0``).
 
     Attributes
     ----------
     name : str
-    p0 : ndarray (31, 31)
-        Covariance of the independent initial errors, SI (scale factors relative).
+    p0 : ndarray (n, n)
+        Covariance of the independent initial errors of the state of :class:`model.ErrorModel` with the
+        parameters ``names``, SI (scale factors relative).
     gyro_arw, accel_vrw : ndarray (3,)
         White-noise densities, rad/sqrt(s) and m/s/sqrt(s).
     correlated : bool
         ``p0`` has terms between groups (a calibrated table's full covariance).
     origin : str
         Where the errors came from (files), for the report.
-    transform : ndarray (31, 31) or None
+    transform : ndarray (n, n) or None
         None: the initial errors as given; else the map of an alignment (:meth:`Sources.aligned`).
+    names : tuple of str
+        The parameters whose errors are states (the 21, then extra groups; a sheet's: :data:`model.SHEET_NAMES`).
     """
 
     name: str
@@ -111,10 +111,24 @@ class Sources:
     correlated: bool = False
     origin: str = ""
     transform: np.ndarray | None = None
+    names: tuple[str, ...] = SHEET_NAMES
+
+    def model(self, site: Site) -> ErrorModel:
+        """The error model of these sources' state at ``site``."""
+        return ErrorModel(site, self.names)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """The names of the state's entries (navigation errors, then ``names``)."""
+        return NAV_NAMES + tuple(self.names)
+
+    def groups(self) -> dict[str, list[int]]:
+        """The independent sources and their states (:func:`source_groups`)."""
+        return source_groups(self.names)
 
     def initial_map(self) -> np.ndarray:
         """The map from the independent errors to the initial error state (identity unless aligned)."""
-        return np.eye(M.N_STATE) if self.transform is None else self.transform
+        return np.eye(len(self.p0)) if self.transform is None else self.transform
 
     @property
     def initial_covariance(self) -> np.ndarray:
@@ -124,7 +138,7 @@ class Sources:
 
     def group_covariance(self, group: str) -> np.ndarray:
         """The initial covariance of one source alone (its block, through the alignment if aligned)."""
-        idx = GROUPS[group]
+        idx = self.groups()[group]
         p = np.zeros_like(self.p0)
         p[np.ix_(idx, idx)] = self.p0[np.ix_(idx, idx)]
         t = self.initial_map()
@@ -136,9 +150,10 @@ class Sources:
 
     def aligned(self, site: Site, attitude: np.ndarray) -> "Sources":
         """The same errors with the initial attitude error of a static alignment at ``attitude`` added:
-        ``phi_0 = A x_sensor`` (:func:`model.alignment_map`) plus the sheet's own initial errors."""
-        t = np.eye(M.N_STATE)
-        t[M.PHI, M.SENSOR] = M.alignment_map(site, attitude)
+        ``phi_0 = A x_sensor`` (:meth:`ErrorModel.alignment_map`, eq. 15) plus the sheet's own initial errors."""
+        model = self.model(site)
+        t = np.eye(model.n_state)
+        t[PHI, model.sensor] = model.alignment_map(attitude)
         return dataclasses.replace(self, transform=t, name=f"{self.name} (aligned)")
 
 
@@ -176,7 +191,8 @@ def parse_sheet(data: dict, source: str) -> Sources:
                                                "meaning", "note"}
     if extra:
         raise InputError(source, f"unknown key(s) {shown(', '.join(sorted(extra)))}")
-    p0 = np.zeros((M.N_STATE, M.N_STATE))
+    n_state = N_NAV + len(SHEET_NAMES)
+    p0 = np.zeros((n_state, n_state))
     noise = {}
     for section in known_sections:
         table = data.get(section, {})
@@ -187,7 +203,9 @@ def parse_sheet(data: dict, source: str) -> Sources:
             allowed = ", ".join(k for s, k in SHEET_KEYS if s == section)
             raise InputError(source, f"[{section}] unknown key(s) {shown(', '.join(sorted(unknown)))} ({allowed})")
         for key, raw in table.items():
-            states, size = SHEET_KEYS[(section, key)]
+            entry = SHEET_KEYS[(section, key)]
+            states, size = ((_states(SHEET_NAMES, entry), registry.GROUPS[entry].natural_scale)
+                            if isinstance(entry, str) else entry)
             count = states if isinstance(states, int) else len(states)
             sig = _values(raw, count, source, f"[{section}] {key}") * size / float(level)
             if isinstance(states, int):
@@ -207,11 +225,7 @@ def load_sheet(name_or_path) -> Sources:
     InputError
         Naming the file (and the section and key) at fault, or listing the shipped sheets.
     """
-    path, is_shipped = shipped.find_file(name_or_path, "sheets", "error sheet")
-    data = read_toml(path, "error sheet")
-    if data.get("format") != FORMAT:
-        raise InputError(path, f"format must be {FORMAT!r}, found {shown(data.get('format'))}")
-    sheet = parse_sheet(data, str(path))
-    return dataclasses.replace(sheet, origin=f"{path.stem} (shipped)" if is_shipped else str(path))
+    data, _, path, origin = shipped.read_file(name_or_path, "sheets", "error sheet", FORMAT, "error sheet")
+    return dataclasses.replace(parse_sheet(data, str(path)), origin=origin)
 
 

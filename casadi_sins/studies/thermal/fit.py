@@ -39,7 +39,7 @@ import numpy as np
 
 from ...core.errors import InputError
 from ...model.parameters import ParameterSet
-from ...model.registry import natural_scale_of, relative_mask
+from ...model.registry import natural_size
 from ...model.thermal import ThermalModel
 
 #: ``a2`` stays when ``(a2 / sigma)^2`` exceeds this (Akaike: 2 per coefficient).
@@ -99,7 +99,7 @@ def _scaling(points: list[Point]) -> tuple[np.ndarray, np.ndarray]:
     """The mean value of each parameter and the size of its natural unit (SI; scale factors relative)."""
     names = points[0].params.names
     mean = np.mean([p.params.values for p in points], axis=0)
-    size = natural_scale_of(names) * np.where(relative_mask(names), np.abs(mean), 1.0)
+    size = natural_size(names, mean)
     return mean, size
 
 

@@ -18,7 +18,7 @@ import pandas as pd
 from ...core.version import build_identity, software_versions
 from ...data.tables import table_text
 from ...data.thermal import write_thermal
-from ...model.registry import GROUPS, natural_scale_of, natural_unit_of, relative_mask
+from ...model.registry import GROUPS, natural_size, natural_unit_of, relative_mask
 from ...model.thermal import ThermalModel
 from ...report.calibration import companion_paths, parameter_rows
 from ...report.plots import figure_bytes, pyplot
@@ -35,7 +35,7 @@ def at_name(temperature_c: float) -> str:
 def natural_coefficients(model: ThermalModel) -> tuple[np.ndarray, np.ndarray]:
     """Coefficients and sigma (n, 3) in natural units: ``p_ref`` as its natural-unit size (scale factors
     in ppm of themselves: 0), ``a1`` per degC, ``a2`` per degC^2 (scale factors ppm of ``p_ref``)."""
-    size = natural_scale_of(model.names) * np.where(relative_mask(model.names), np.abs(model.coefficients[:, 0]), 1.0)
+    size = natural_size(model.names, model.coefficients[:, 0])
     coef = model.coefficients / size[:, None]
     coef[relative_mask(model.names), 0] = 0.0
     return coef, model.sigma / size[:, None]
@@ -109,7 +109,7 @@ def plot_group(fit: ThermalFit, key: str) -> bytes | None:
     fig, axes = plt.subplots(2, len(names), figsize=(3.6 * len(names), 5.4), squeeze=False, sharex=True)
     m = fit.model
     grid = np.linspace(min(m.range_c[0], m.reference_c) - 5, max(m.range_c[1], m.reference_c) + 5, 80)
-    size = natural_scale_of(m.names) * np.where(relative_mask(m.names), np.abs(m.coefficients[:, 0]), 1.0)
+    size = natural_size(m.names, m.coefficients[:, 0])
     temps = np.array([p.temperature_c for p in fit.points])
     for column, name in enumerate(names):
         i = m.names.index(name)

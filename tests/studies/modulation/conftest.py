@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from casadi_sins.core.earth import Site
+from casadi_sins.model.registry import NAMES
 from casadi_sins.studies.modulation import shipped
 from casadi_sins.studies.modulation.sources import load_sheet
 
@@ -54,3 +55,27 @@ def guan_site():
 def yu_ruan_site():
     """45.77 deg N, height 0."""
     return Site(np.radians(YU_RUAN_LATITUDE_DEG))
+
+
+def _write_table(folder: Path, with_sigma: bool = True, extra_rows=()) -> Path:
+    """``folder/params.csv``: a navigation-grade table of the 21 (sigma column empty without ``with_sigma``)
+    and any extra rows ``parameter,unit,value,sigma``."""
+    rows = []
+    for name in NAMES:
+        if "_scale_" in name:
+            accel = name.startswith("accel")
+            unit, value, sigma = ("m/s/pulse", 3.6e-4, 3.6e-10) if accel else ("rad/pulse", 1e-7, 1e-12)
+        elif "_bias_" in name:
+            unit, value, sigma = ("ug", 100.0, 5.0) if name.startswith("accel") else ("deg/h", 0.1, 0.005)
+        else:
+            unit, value, sigma = "arcsec", 10.0, 2.0
+        rows.append(f"{name},{unit},{value},{sigma if with_sigma else ''}")
+    path = folder / "params.csv"
+    path.write_text("parameter,unit,value,sigma\n" + "\n".join(rows + list(extra_rows)) + "\n")
+    return path
+
+
+@pytest.fixture
+def table_file():
+    """The writer of a calibrated table (:func:`_write_table`)."""
+    return _write_table

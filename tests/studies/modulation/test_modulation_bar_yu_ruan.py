@@ -56,7 +56,7 @@ def test_improved_over_common_velocity_about_one_half(det):
 def test_improved_scheme_oscillates_less(yu_ruan_sheet, yu_ruan_site):
     """Fig. 6: the integral of the gyro errors in the geographic frame oscillates less under the improved
     scheme (north and up peak-to-peak over two periods)."""
-    x = yu_ruan_sheet.values()[M.SENSOR]
+    x = yu_ruan_sheet.values()[M.N_NAV:]
     pp = {}
     for name in ("yu-ruan2014-common", "yu-ruan2014-improved"):
         scheme = load_scheme(name)

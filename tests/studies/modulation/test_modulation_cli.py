@@ -11,7 +11,6 @@ from casadi_sins.core.units import TO_SI
 from casadi_sins.model.registry import NAMES
 
 SHEET = str(Path(__file__).resolve().parents[3] / "problems" / "guan2023-table1.toml")
-TABLE_HEADER = "parameter,unit,value,sigma\n"
 SHEET_FORMAT = 'format = "casadi-sins-errors/1"\n'
 
 
@@ -129,33 +128,17 @@ def test_a_problem_file_is_not_a_sheet(tmp_path, capsys):
     one_line_error(code, err, "format must be 'casadi-sins-errors/1'")
 
 
-def _table(tmp_path, with_sigma=True) -> Path:
-    rows = []
-    for name in NAMES:
-        if "_scale_" in name:
-            accel = name.startswith("accel")
-            unit, value, sigma = ("m/s/pulse", 3.6e-4, 3.6e-10) if accel else ("rad/pulse", 1e-7, 1e-12)
-        elif "_bias_" in name:
-            unit, value, sigma = ("ug", 100.0, 5.0) if name.startswith("accel") else ("deg/h", 0.1, 0.005)
-        else:
-            unit, value, sigma = "arcsec", 10.0, 2.0
-        rows.append(f"{name},{unit},{value},{sigma if with_sigma else ''}")
-    path = tmp_path / "params.csv"
-    path.write_text(TABLE_HEADER + "\n".join(rows) + "\n")
-    return path
-
-
-def test_a_table_without_sigma(tmp_path, capsys):
+def test_a_table_without_sigma(tmp_path, capsys, table_file):
     args = base(tmp_path)
-    args[2:4] = ["--params", _table(tmp_path, with_sigma=False)]
+    args[2:4] = ["--params", table_file(tmp_path, with_sigma=False)]
     code, out, err = run(capsys, *args)
     one_line_error(code, err, "no sigma")
 
 
-def test_a_table_whose_covariance_is_not_positive_semidefinite(tmp_path, capsys):
+def test_a_table_whose_covariance_is_not_positive_semidefinite(tmp_path, capsys, table_file):
     import pandas as pd
 
-    table = _table(tmp_path)
+    table = table_file(tmp_path)
     frame = pd.read_csv(table)
     sigma = np.array([s * TO_SI[u] for s, u in zip(frame["sigma"], frame["unit"])])
     cov = np.diag(sigma**2)
@@ -176,10 +159,10 @@ def test_a_table_whose_covariance_is_not_positive_semidefinite(tmp_path, capsys)
     assert json.loads((tmp_path / "out" / "modulation.json").read_text())["errors"]["correlated"]
 
 
-def test_the_covariance_of_a_companion_report(tmp_path, capsys):
+def test_the_covariance_of_a_companion_report(tmp_path, capsys, table_file):
     import pandas as pd
 
-    table = _table(tmp_path)
+    table = table_file(tmp_path)
     frame = pd.read_csv(table)
     sigma = np.array([s * TO_SI[u] for s, u in zip(frame["sigma"], frame["unit"])])
     (tmp_path / "params.report.json").write_text(json.dumps({"covariance": np.diag(sigma**2).tolist()}))

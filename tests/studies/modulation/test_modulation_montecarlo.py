@@ -10,7 +10,6 @@ import math
 import numpy as np
 import pytest
 
-from casadi_sins.studies.modulation import model as M
 from casadi_sins.studies.modulation.montecarlo import monte_carlo, montecarlo_files, run_schemes
 from casadi_sins.studies.modulation.schemes import load_scheme
 from casadi_sins.studies.modulation.sources import NOISES
@@ -24,7 +23,8 @@ SPREAD = math.sqrt(1.0 / (4 * RUNS))
 @pytest.fixture(scope="module")
 def sheet_with_asymmetry(guan_sheet):
     p0 = guan_sheet.p0.copy()
-    p0[M.GYRO_ASYM, M.GYRO_ASYM] = (5e-6) ** 2  # 5 ppm, to exercise the term
+    asym = guan_sheet.groups()["gyro scale-factor asymmetry"]
+    p0[asym, asym] = (5e-6) ** 2  # 5 ppm, to exercise the term
     return dataclasses.replace(guan_sheet, p0=p0)
 
 

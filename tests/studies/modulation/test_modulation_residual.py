@@ -5,11 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from casadi_sins.studies.modulation import model as M
 from casadi_sins.core import earth, units
+from casadi_sins.model import registry as R
+from casadi_sins.studies.modulation import model as M
 from casadi_sins.studies.modulation.covariance import propagate
 from casadi_sins.studies.modulation.residual import equivalent_drift, piece_integral, sensor_vector, turn_forms
-from casadi_sins.studies.modulation.schemes import Piece, load_scheme, parse_scheme
+from casadi_sins.studies.modulation.schemes import load_scheme, parse_scheme, turn
 
 W = math.radians(6.0)  # table rate of the single-axis cases
 ARCSEC, DEG_PER_H = units.ARCSEC, units.DEG_PER_H
@@ -29,16 +30,16 @@ def test_a_half_turn_error_has_five_forms_and_only_constant_and_sin_survive(yu_r
     """Eq. 7: the navigation-frame gyro error of a turn is const + sin a + cos a + sin 2a + cos 2a;
     eq. 8: over a 180 deg turn only the constant and the sin a terms integrate to non-zero."""
     rng = np.random.default_rng(3)
-    x = np.zeros(M.N_STATE - M.N_NAV)
-    x[M.GYRO_BIAS.start - M.N_NAV:M.GYRO_MISALIGN.stop - M.N_NAV] = rng.normal(0, 1e-5, 12)
+    x = np.zeros(len(M.SHEET_NAMES))
+    x[R.GYRO_BIAS.start:R.GYRO_MISALIGN.stop] = rng.normal(0, 1e-5, 12)
     rate = math.radians(20.0)
-    turn = Piece(0.0, math.pi / rate, np.eye(3), np.array(axis, float), rate)
-    forms = turn_forms(turn, yu_ruan_site, x)
+    half = turn(0.0, math.pi / rate, np.eye(3), np.array(axis, float), rate)
+    forms = turn_forms(half, yu_ruan_site, x)
     scale = np.abs(np.concatenate([forms[k] for k in ("const", "sin", "cos", "sin2", "cos2")])).max()
     assert forms["misfit"].max() < 1e-12 * scale  # exactly the five forms
     # int_0^pi over the turn: cos a, sin 2a, cos 2a vanish; const -> pi/w, sin a -> 2/w
     expected = forms["const"] * math.pi / rate + forms["sin"] * 2.0 / rate
-    np.testing.assert_allclose(piece_integral(turn, yu_ruan_site) @ x, expected, rtol=1e-10, atol=1e-18)
+    np.testing.assert_allclose(piece_integral(half, yu_ruan_site) @ x, expected, rtol=1e-10, atol=1e-18)
     assert np.abs(forms["cos"]).max() > 0.1 * scale  # the cancelled forms are really there
 
 
@@ -52,7 +53,7 @@ def test_earth_rate_coupling_left_by_the_reversed_8_step_sequence(yu_ruan_site):
     cancels over the four positions (w_ie,E = 0), see docs/modulation.md."""
     scheme = load_scheme("yu-ruan2014-reversal-8")
     errors = {f"gyro_scale_{a}": 1e-5 for a in "xyz"}
-    errors.update({n: 2 * ARCSEC for n in M.PARAM_NAMES if n.startswith("gyro_misalign")})
+    errors.update({n: 2 * ARCSEC for n in R.NAMES if n.startswith("gyro_misalign")})
     east, north, up = drift(scheme, yu_ruan_site, "earth", **errors) / DEG_PER_H
     assert north == pytest.approx(1e-4, rel=0.10)
     assert up == pytest.approx(1e-4, rel=0.10)
@@ -77,8 +78,8 @@ def test_reversed_sequence_leaves_table_rate_misalignment_coupling_the_improved_
     assert abs(rejected[0]) > 0.03 * DEG_PER_H
     improved = load_scheme("yu-ruan2014-improved")
     d = equivalent_drift(improved, yu_ruan_site, "total")
-    keep = [M.GYRO_SCALE.start - M.N_NAV + k for k in range(3)]
-    others = np.delete(d, keep + list(range(M.GYRO_ASYM.start - M.N_NAV, M.N_STATE - M.N_NAV)), axis=1)
+    keep = [R.GYRO_SCALE.start + k for k in range(3)]
+    others = np.delete(d, keep + [M.SHEET_NAMES.index(n) for n in R.GROUPS["gyro_asym"].names], axis=1)
     assert np.abs(others).max() < 1e-12
     assert np.abs(d[:, keep]).max() > 1e-6  # the scale x Earth-rate terms remain
 
@@ -119,13 +120,13 @@ def test_eq33_scale_factor_symmetric_and_asymmetric(guan_site):
     np.testing.assert_allclose(drift(continuous(), guan_site, gyro_scale_x=k), [0, k * w_ie[1] / 2, 0], atol=1e-20)
     np.testing.assert_allclose(drift(continuous(), guan_site, gyro_scale_y=k), [0, k * w_ie[1] / 2, 0], atol=1e-20)
     # horizontal asymmetric ones are cancelled
-    np.testing.assert_allclose(drift(continuous(), guan_site, gyro_asymmetry_x=k, gyro_asymmetry_y=k), 0, atol=1e-20)
+    np.testing.assert_allclose(drift(continuous(), guan_site, gyro_scale_asym_x=k, gyro_scale_asym_y=k), 0, atol=1e-20)
     # z: with w and w_ie,U under continuous rotation; reciprocating undoes the w part, not the asymmetric one
     np.testing.assert_allclose(drift(continuous(), guan_site, gyro_scale_z=k), [0, 0, k * (w_ie[2] + W)], rtol=1e-12)
     recip = load_scheme("single-axis-reciprocating")
     np.testing.assert_allclose(drift(recip, guan_site, gyro_scale_z=k), [0, 0, k * w_ie[2]], rtol=1e-9, atol=1e-20)
     for scheme in (continuous(), recip):
-        np.testing.assert_allclose(drift(scheme, guan_site, gyro_asymmetry_z=k), [0, 0, k * W], rtol=1e-3)
+        np.testing.assert_allclose(drift(scheme, guan_site, gyro_scale_asym_z=k), [0, 0, k * W], rtol=1e-3)
 
 
 @pytest.mark.parametrize("name,modulated", [("gyro_misalign_xy", False), ("gyro_misalign_yx", False),

@@ -14,7 +14,7 @@ from casadi_sins.studies.modulation import model as M
 from casadi_sins.studies.modulation.calibrated import report_covariance, table_sources
 from casadi_sins.studies.modulation.covariance import propagate
 from casadi_sins.studies.modulation.schemes import load_scheme
-from casadi_sins.studies.modulation.sources import GROUPS, load_sheet, parse_sheet
+from casadi_sins.studies.modulation.sources import load_sheet, parse_sheet
 
 HEADER = "parameter,unit,value,sigma"
 
@@ -27,7 +27,7 @@ def test_the_table1_sheet_in_si(guan_sheet):
     np.testing.assert_allclose(sig[M.ACCEL_BIAS], 30 * units.UG)
     np.testing.assert_allclose(guan_sheet.gyro_arw, 0.002 * units.DEG / 60)  # deg/sqrt(h) -> rad/sqrt(s)
     np.testing.assert_allclose(guan_sheet.accel_vrw, 5 * units.UG)
-    assert not np.any(sig[M.GYRO_ASYM])
+    assert not np.any(sig[guan_sheet.groups()["gyro scale-factor asymmetry"]])
 
 
 def test_shipped_sheets_by_name(guan_sheet):
@@ -169,10 +169,13 @@ def test_a_report_covariance_that_does_not_fit_the_table(tmp_path, change, messa
         table_sources(table)
 
 
-def test_extra_groups_of_an_extended_table_are_left_out(tmp_path):
+def test_every_group_of_an_extended_table_is_a_source(tmp_path):
+    """Issue 39: the modulation state is the navigation errors followed by the registry's names of the table."""
     table = write_table(tmp_path, ["accel_time_offset,ms,0.1,0.01"])
     src = table_sources(table)
-    assert "extra groups left out: accel_time_offset" in src.origin
+    assert src.names == NAMES + ("accel_time_offset",) and "left out" not in src.origin
+    assert np.sqrt(src.p0[-1, -1]) == pytest.approx(0.01e-3)
+    assert "gyro/accel time offset" in src.groups()
     np.testing.assert_allclose(np.sqrt(np.diag(src.p0))[M.GYRO_SCALE], 2e-6)
 
 
@@ -187,19 +190,22 @@ def test_a_table_without_sigma(tmp_path):
 def test_alignment_makes_the_initial_tilt_cancel_the_accelerometer_bias(guan_sheet, guan_site):
     """Aligned on a level ENU IMU, an east accelerometer bias is exactly cancelled by the tilt it causes."""
     aligned = guan_sheet.aligned(guan_site, np.eye(3))
-    x = np.zeros(M.N_STATE)
+    x = np.zeros(len(guan_sheet.p0))
     x[M.INDEX["accel_bias_x"]] = 30 * units.UG
     prop = propagate(load_scheme("strapdown"), guan_site, 2.0, np.zeros(3), np.zeros(3))
     assert np.abs(prop.mean(aligned.initial_map() @ x)).max() < 1e-6  # m, round-off
     assert np.abs(prop.mean(x)[:, 2:]).max() > 100.0  # not aligned: ~ R * 3e-5 rad of Schuler swing
-    assert set(GROUPS) >= {"gyro scale asymmetry", "initial heading"}
+    assert set(guan_sheet.groups()) >= {"gyro scale-factor asymmetry", "initial heading"}
 
 
-def test_a_tables_gyro_scale_asymmetry_is_the_models_dk_star(tmp_path):
-    """The same term (``A_i |w_i|``): the table's sigma lands on the asymmetry states; g-sensitivity is named
-    as left out."""
+def test_a_tables_gyro_scale_asymmetry_and_g_sensitivity_are_sources(tmp_path):
+    """The registry's names (``gyro_scale_asym_*``, the term ``A_i |w_i|``) and the g-sensitivity: the table's
+    sigma lands on their states, in the registry's order, in natural units converted by the registry."""
     rows = [f"gyro_scale_asym_{a},ppm,3,{s}" for a, s in zip("xyz", (0.05, 0.06, 0.07))]
     rows += [f"gyro_gsens_{i}{j},deg/h/g,0.001,0.0001" for i in "xyz" for j in "xyz"]
     src = table_sources(write_table(tmp_path, rows))
-    np.testing.assert_allclose(np.sqrt(np.diag(src.p0))[M.GYRO_ASYM], np.array([0.05, 0.06, 0.07]) * 1e-6)
-    assert "gyro_gsens_xx" in src.origin and "gyro_scale_asym_x" not in src.origin
+    groups = src.groups()
+    sig = np.sqrt(np.diag(src.p0))
+    np.testing.assert_allclose(sig[groups["gyro scale-factor asymmetry"]], np.array([0.05, 0.06, 0.07]) * 1e-6)
+    np.testing.assert_allclose(sig[groups["gyro g-sensitivity"]], 0.0001 * units.DEG_PER_H / 9.80665)
+    assert src.state_names[-3:] == ("gyro_scale_asym_x", "gyro_scale_asym_y", "gyro_scale_asym_z")

@@ -9,22 +9,22 @@ import platform
 def _build_identity() -> tuple[str, str | None, str | None]:
     """(version, commit, commit date) of this build.
 
-    setuptools-scm writes ``casadi_sins/_version.py`` when the package is built or installed (from the
+    setuptools-scm writes ``casadi_sins/core/_build.py`` when the package is built or installed (from the
     git tag ``vX.Y.Z`` and the commit); a source tree that was never built has no such file and reads
     ``unknown``.
     """
     try:
-        from .. import _version
+        from . import _build
     except ImportError:
         return "unknown (not built: pip install the checkout)", None, None
-    commit = _version.__commit__ if _version.__commit__ not in ("None", "") else None
+    commit = _build.__commit__ if _build.__commit__ not in ("None", "") else None
     if commit and commit.startswith("g"):
         commit = commit[1:]
     commit = commit[:12] if commit else None
-    if commit and _version.__dirty__:
+    if commit and _build.__dirty__:
         commit += " with uncommitted changes"
-    date = _version.__commit_date__ if _version.__commit_date__ not in ("None", "") else None
-    return _version.__version__, commit, date
+    date = _build.__commit_date__ if _build.__commit_date__ not in ("None", "") else None
+    return _build.__version__, commit, date
 
 
 __version__, __commit__, __commit_date__ = _build_identity()

@@ -37,7 +37,7 @@ def package_files(tree: Path) -> set[str]:
     if (tree / ".git").exists():
         return {f for f in _git("ls-files", PACKAGE, cwd=tree).splitlines() if not os.path.islink(tree / f)}
     return {str(p.relative_to(tree)) for p in (tree / PACKAGE).rglob("*")
-            if p.is_file() and "__pycache__" not in p.parts and p.name != "_version.py"}
+            if p.is_file() and "__pycache__" not in p.parts and p.name != "_build.py"}
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +67,7 @@ def test_the_wheel_holds_every_module_and_data_file_of_the_package(built):
     names = set(zipfile.ZipFile(wheel).namelist())
     missing = sorted(expected - names)
     assert not missing, f"the wheel lacks {missing[:20]}"
-    assert f"{PACKAGE}/_version.py" in names  # the build's identity
+    assert f"{PACKAGE}/core/_build.py" in names  # the build's identity
 
 
 def test_the_sdist_holds_every_file_of_the_package_and_the_project(built):
@@ -91,5 +91,5 @@ def test_the_wheel_is_named_by_the_commit_it_was_built_from(built):
     if not _is_git_checkout():
         pytest.skip("not a git clone: no commit to name")
     _, wheel, _ = built
-    text = zipfile.ZipFile(wheel).read(f"{PACKAGE}/_version.py").decode()
+    text = zipfile.ZipFile(wheel).read(f"{PACKAGE}/core/_build.py").decode()
     assert _git("rev-parse", "HEAD").strip()[:12] in text

@@ -18,7 +18,8 @@
     temperature_c = 23.5
     date = "2024-05-17"
 
-    [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg)
+    [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg);
+                                       # a session by hand leaves them out (a rest at any orientation, a free move)
     group = 1
     kind = "static"
     orientation = "NUE"
@@ -46,6 +47,8 @@ from .samples import read_samples, samples_writer
 
 #: The longest recording name (it becomes file names and report titles).
 MAX_NAME = 200
+#: The orientation of a rest at any orientation, when it is written at all (it may be left out).
+FREE = "free"
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -167,6 +170,8 @@ def _parse_segment(item, number: int, path: Path, line: int | None) -> Segment:
         raise fail(f"end_s {end:g} is not after start_s {start:g}")
     if kind == "static":
         orientation = item.get("orientation")
+        if orientation is None or (isinstance(orientation, str) and orientation.lower() == FREE):
+            return Segment(number, group, kind, start, end)  # a rest at any orientation (a session by hand)
         if not isinstance(orientation, str) or orientation != orientation.upper():
             raise fail(f"orientation {shown(orientation)} must be three capital letters of N S E W U D")
         try:
@@ -176,6 +181,10 @@ def _parse_segment(item, number: int, path: Path, line: int | None) -> Segment:
         return Segment(number, group, kind, start, end, orientation=orientation)
     if kind == "rotation":
         axis = item.get("axis")
+        if axis is None and item.get("angle_deg") is None:
+            return Segment(number, group, kind, start, end)  # a free move: only that the unit moved
+        if axis is None or item.get("angle_deg") is None:
+            raise fail("a rotation gives both 'axis' and 'angle_deg', or neither (a free move by hand)")
         try:
             orient.parse_axis(axis)
         except orient.OrientationError as exc:
@@ -195,7 +204,9 @@ def description(rec: Recording, data_name: str) -> dict:
     segments = []
     for seg in rec.segments:
         item = {"group": seg.group, "kind": seg.kind}
-        if seg.is_static:
+        if seg.is_free:
+            pass  # a rest at any orientation, a free move: the format leaves the keys out
+        elif seg.is_static:
             item["orientation"] = seg.orientation
         else:
             item["axis"] = seg.axis

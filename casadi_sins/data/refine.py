@@ -63,6 +63,8 @@ def _rad_per_pulse(rec: Recording) -> np.ndarray:
     for group in rec.group_ids:
         segs = rec.group_segments(group)
         for before, rotation in zip(segs[0::2], segs[1::2]):
+            if rotation.is_free:
+                continue
             rest = rec.gyro[rec.segment_samples(before)].mean(axis=0)
             part = rec.segment_samples(rotation)
             total = float(np.linalg.norm((rec.gyro[part] - rest).sum(axis=0)))

@@ -1,0 +1,221 @@
+"""Rest and motion from the *changes* of the signals, whatever their offset: the front end of a session by hand.
+
+A unit moved by hand rests at any orientation, its pulses may be raw counts with an ADC's mid-scale
+offset (tens of thousands of counts: 8 g, 400 deg/s), and a hand that holds it trembles.  The size of the
+signal says nothing then; its changes do.  Every test here takes a rest's own mean off first:
+
+1. **Activity.**  Per channel (three gyros, three accelerometers) the standard deviation over a short
+   moving window (:data:`WINDOW_S`) against the channel's quiet level (a low percentile of that deviation
+   over the recording: the sensor noise and any tremor); the largest ratio of the six is the activity.
+   A move by hand changes the rates by tens of deg/s within a window, far above it.
+2. **Candidate rests.**  Stretches between *sure motion* (activity above :data:`SURE_MOTION`, or above a
+   share of the recording's moves) that last long enough.
+3. **The rest's own noise.**  Within each stretch the quiet samples are those whose activity stays within
+   :data:`QUIET_SPREAD` times the stretch's own median activity (the threshold follows the measured rest
+   noise: a trembling hand raises it, a unit put down lowers it); each run of quiet samples is a rest.
+4. **Slow ends.**  A move ends slowly: the rate creeps back to rest, too smoothly to raise the moving
+   deviation.  Each rest's ends are cut where the mean of any channel over :data:`CREEP_WINDOW_S` departs from
+   the rest's own mean (its middle half's) by more than :data:`CREEP_SIGMAS` times the scatter of such means in
+   that middle (sensor noise and tremor alike); then placed at the fitted onset of the motion beside it
+   (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle departs from
+   the rest's line, which takes any offset; the slow start of a move shows there first).
+5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
+   about the vertical): its mean gyro rate then stands off the others.  Rests whose mean rate differs from
+   the median of all rests by more than :data:`RATE_OUTLIER` times the rests' spread are taken for motion.
+
+:func:`find_rests` returns the rests as sample ranges; :func:`motion_mask` the per-sample motion flags of a
+recording whose rests are known (the checks of a given description, :mod:`data.refine`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .edges import angle_track, motion_end, motion_start
+
+#: Seconds of the moving window of the activity and of the moving mean of the slow ends.
+WINDOW_S = 0.2
+#: Fewest samples in that window (a low sample rate).
+MIN_WINDOW = 5
+#: Percentile of the moving deviation taken as a channel's quiet level, and the ratio of that percentile of a
+#: sample deviation to its median under white noise (21 samples: 0.83), so that the level is the typical one.
+QUIET_PERCENTILE = 10.0
+#: Activity that is surely motion: this many times the quiet level, or this share of the recording's moves
+#: (the 99th percentile of the activity), whichever is larger.
+SURE_MOTION = 8.0
+MOTION_SHARE = 0.05
+#: Quiet samples of a stretch: activity within this many times the stretch's own median activity.
+QUIET_SPREAD = 2.5
+#: A rest's end is cut where a channel's mean over this many seconds departs from the rest's mean by more than
+#: this many times the scatter of such means in the middle of the rest.
+CREEP_WINDOW_S = 1.0
+CREEP_SIGMAS = 3.5
+#: A rest whose mean gyro rate stands off the median of the rests by more than this many times their spread
+#: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
+RATE_OUTLIER = 10.0
+RATE_OUTLIER_FLOOR = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Rests:
+    """The rests of a recording and what was measured to find them.
+
+    Attributes
+    ----------
+    spans : list of (int, int)
+        ``(first, stop)`` sample ranges of the rests, in time order.
+    quiet_level : ndarray (6,)
+        Each channel's quiet moving deviation (pulses per sample): gyro x, y, z, accel x, y, z.
+    activity : ndarray (N,)
+        The activity per sample (ratio to the quiet level).
+    sure_motion : float
+        The activity above which a sample surely moves.
+    turning : list of (int, int)
+        Quiet stretches left out because their mean rate stood off the other rests' (a slow constant spin).
+    """
+
+    spans: list[tuple[int, int]]
+    quiet_level: np.ndarray
+    activity: np.ndarray
+    sure_motion: float
+    turning: list[tuple[int, int]] = dataclasses.field(default_factory=list)
+
+    @property
+    def moves(self) -> bool:
+        """Whether anything moves at all (some sample surely moves)."""
+        return bool(np.any(self.activity > self.sure_motion))
+
+
+def window_samples(rate_hz: float) -> int:
+    """The moving window (odd, at least :data:`MIN_WINDOW` samples)."""
+    n = max(MIN_WINDOW, int(round(WINDOW_S * rate_hz)))
+    return n + 1 - n % 2
+
+
+def moving_mean(x: np.ndarray, width: int) -> np.ndarray:
+    """Centred moving mean along axis 0 (the window shrinks at the ends), any offset (the median is taken off
+    before summing, so raw counts lose no precision)."""
+    x = np.asarray(x, dtype=float)
+    centre = np.median(x, axis=0) if len(x) else 0.0
+    c = np.cumsum(np.concatenate([np.zeros((1,) + x.shape[1:]), x - centre]), axis=0)
+    n = len(x)
+    half = width // 2
+    lo = np.clip(np.arange(n) - half, 0, n)
+    hi = np.clip(np.arange(n) + half + 1, 0, n)
+    count = (hi - lo).reshape((-1,) + (1,) * (x.ndim - 1))
+    return (c[hi] - c[lo]) / count + centre
+
+
+def moving_deviation(x: np.ndarray, width: int) -> np.ndarray:
+    """Centred moving standard deviation along axis 0: a rest's own mean taken off, whatever the offset."""
+    x = np.asarray(x, dtype=float)
+    centred = x - (np.median(x, axis=0) if len(x) else 0.0)
+    mean = moving_mean(centred, width)
+    square = moving_mean(centred**2, width)
+    return np.sqrt(np.maximum(square - mean**2, 0.0))
+
+
+def activity(gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(activity, quiet_level)``: per sample the largest of the six channels' moving deviation over its quiet
+    level (step 1 of the module docstring), and the quiet levels (6,)."""
+    width = window_samples(rate_hz)
+    deviation = moving_deviation(np.column_stack([gyro, accel]), width)
+    level = np.percentile(deviation, QUIET_PERCENTILE, axis=0)
+    floor = np.maximum(level, 1e-12 * np.maximum(np.max(deviation, axis=0), 1e-300))  # a channel that never changes
+    return np.max(deviation / floor, axis=1), floor
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    return [(int(a), int(b)) for a, b in zip(edges[0::2], edges[1::2])]
+
+
+def find_rests(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, shortest_s: float) -> Rests:
+    """The rests of a recording from the changes of its signals (module docstring), each at least
+    ``shortest_s`` long."""
+    gyro, accel = np.asarray(gyro, dtype=float), np.asarray(accel, dtype=float)
+    act, level = activity(gyro, accel, rate_hz)
+    sure = max(SURE_MOTION, MOTION_SHARE * float(np.percentile(act, 99.0))) if len(act) else SURE_MOTION
+    shortest = max(1, int(math.ceil(shortest_s * rate_hz - 1e-9)))
+    width = window_samples(rate_hz)
+    pulses = np.column_stack([gyro, accel])
+    track = angle_track(gyro)
+    spans: list[tuple[int, int]] = []
+    for a, b in _runs(act <= sure):
+        if b - a < shortest:
+            continue
+        own = float(np.median(act[a:b]))
+        for qa, qb in _runs(act[a:b] <= QUIET_SPREAD * max(own, 1.0)):
+            if qb - qa >= shortest:
+                first, stop = _without_creep(pulses, a + qa, a + qb, width)
+                first, stop = _at_onsets(track, first, stop, a, b, len(gyro), rate_hz)
+                if stop - first >= shortest:
+                    spans.append((first, stop))
+    spans, turning = _without_spins(gyro, spans, level[:3])
+    return Rests(spans, level, act, sure, turning)
+
+
+def _without_creep(pulses: np.ndarray, first: int, stop: int, width: int) -> tuple[int, int]:
+    """A quiet run cut where a channel's mean over :data:`CREEP_WINDOW_S` (at most an eighth of the run) creeps
+    off the rest's own mean (step 4): the first window from each end whose mean lies within
+    :data:`CREEP_SIGMAS` times the scatter of such window means in the rest's middle half."""
+    n = stop - first
+    span = min(int(round(CREEP_WINDOW_S * width / WINDOW_S)), n // 8)
+    if span < max(2, width // 2):  # too short for a middle to measure the scatter in: the moving deviation decided
+        return first, stop
+    part = pulses[first:stop]
+    part = part - np.median(part, axis=0)
+    c = np.cumsum(np.concatenate([np.zeros((1, part.shape[1])), part]), axis=0)
+    ahead = (c[span:] - c[:-span]) / span  # mean over [k, k + span), k = 0 .. n - span
+    lo_mid, hi_mid = n // 4, n - n // 4
+    mean = part[lo_mid:hi_mid].mean(axis=0)
+    scatter = np.std(ahead[lo_mid:hi_mid - span + 1], axis=0) + 1e-12 * (np.max(np.abs(part), axis=0) + 1e-300)
+    calm = np.all(np.abs(ahead - mean) <= CREEP_SIGMAS * scatter, axis=1)
+    good = np.flatnonzero(calm)
+    if not len(good):
+        return first, first
+    return first + int(good[0]), first + int(good[-1]) + span
+
+
+def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: int, n: int, rate_hz: float):
+    """A rest's edges at the fitted onsets of the motion beside it (:mod:`data.edges`: the gyro-integrated angle
+    departs from the rest's line, far more sensitive than any moving statistic to the slow start of a move), on
+    the rest's safe side; an edge of the recording stays."""
+    settle = min(int(round(rate_hz)), (stop - first) // 4)
+    if settle < 1:
+        return first, stop
+    if moving_before > 0:
+        first = max(first, motion_end(track, stop - settle, moving_before - 1, rate_hz).safe)
+    if moving_after < n:
+        stop = min(stop, motion_start(track, first + settle, moving_after, rate_hz).safe)
+    return first, max(first, stop)
+
+
+def _without_spins(gyro: np.ndarray, spans, quiet_gyro: np.ndarray):
+    """The rests whose mean rate stands off the others' (step 5) moved to ``turning``."""
+    if len(spans) < 3:
+        return spans, []
+    means = np.array([gyro[a:b].mean(axis=0) for a, b in spans])
+    centre = np.median(means, axis=0)
+    off = np.linalg.norm(means - centre, axis=1)
+    spread = float(np.median(off))
+    limit = max(RATE_OUTLIER * spread, RATE_OUTLIER_FLOOR * float(np.linalg.norm(quiet_gyro)))
+    kept = [s for s, d in zip(spans, off) if d <= limit]
+    return kept, [s for s, d in zip(spans, off) if d > limit]
+
+
+def motion_mask(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, rests) -> np.ndarray:
+    """Per sample, whether the unit moves, judged against the stated rests' own levels: the activity above
+    :data:`QUIET_SPREAD` times the median activity of the rest it belongs to (outside every rest: above the
+    sure-motion level), whatever the offset.  ``rests`` are ``(first, stop)`` sample ranges."""
+    act, _ = activity(gyro, accel, rate_hz)
+    sure = max(SURE_MOTION, MOTION_SHARE * float(np.percentile(act, 99.0))) if len(act) else SURE_MOTION
+    moving = act > sure
+    for a, b in rests:
+        if b > a:
+            own = float(np.median(act[a:b]))
+            moving[a:b] = act[a:b] > min(QUIET_SPREAD * max(own, 1.0), sure)
+    return moving

@@ -64,10 +64,12 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
                    "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
     p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
-    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
-                   help="parameters: the paper's 21 (default); extended: also every extra group (accelerometer "
+    p.add_argument("--model", default=None, choices=["21", "extended", "auto"],
+                   help="parameters: the paper's 21; extended: also every extra group (accelerometer "
                    "quadratic and cross-quadratic terms, lever arms, gyro/accel time offset, gyro g-sensitivity and "
-                   "scale asymmetry); auto: the extra groups the data support (nlp only)")
+                   "scale asymmetry); auto: the extra groups the data support (nlp only). Default: by the unit's "
+                   "grade, 21 when its gyros resolve the Earth rate at rest, else auto (a MEMS unit's gyro "
+                   "g-sensitivity)")
     p.add_argument("--export", nargs="+", choices=list(EXPORTS),
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")

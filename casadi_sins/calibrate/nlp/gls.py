@@ -76,18 +76,25 @@ class Fit:
 
 
 def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
-              tolerance: float, max_iterations: int, progress) -> Fit:
-    """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model).
+              tolerance: float, max_iterations: int, progress, presolved: tuple | None = None,
+              x0: np.ndarray | None = None) -> Fit:
+    """Stage 1 (Ipopt, quick weights; or ``presolved``, ``(z, stats)`` of :func:`.start.presolve`: Gauss-Newton
+    under the noise model from a start fitted to the data) and stage 2 (generalised least squares under the noise
+    model).
 
     Raises
     ------
     CalibrationError
-        Ipopt did not converge (naming the unobservable variables when the Jacobian is rank deficient).
+        Stage 1 did not converge: it stopped at its iteration limit or diverged (saying so, and what to try);
+        or, at the converged point, the Jacobian is rank deficient (naming the unobservable variables).
     KeyboardInterrupt
         Ctrl-C inside Ipopt.
     """
-    weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
-    z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress)
+    if presolved is not None:
+        z, stats = presolved
+    else:
+        weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+        z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress, x0)
     if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
         raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
     if not stats["success"] and stalled(stats):
@@ -95,14 +102,31 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
                               f"{STALL_ITERATIONS} iterations: a flat valley of a misfit outside the model; the "
                               "generalised least squares takes it from there")
     elif not stats["success"]:
-        # a rank deficiency is the likelier cause: name it
-        check_rank(np.asarray(graph.jacobian(z)[1]), graph.variable_names())
-        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} after {stats['iter_count']} "
-                               f"iterations (the cap is {max_iterations}: --max-iterations)")
+        # only what was tested: the solver stopped; whether the schedule determines the parameters is judged from
+        # the information matrix at a converged point, never at this one
+        raise CalibrationError(not_converged(stats, max_iterations))
     fit = generalised_least_squares(rec, graph, noise_plan, dataclasses.replace(noise_plan.model), z,
                                     use_rotation_steps, progress)
     fit.ipopt_stats = stats
     return fit
+
+
+def not_converged(stats: dict, max_iterations: int) -> str:
+    """What a stage-1 solver that did not converge did, and what to try (no judgement of the schedule: that needs a
+    converged point)."""
+    status, count = stats["return_status"], int(stats["iter_count"])
+    if status == "Maximum_Iterations_Exceeded":
+        return (f"Ipopt did not converge: it stopped at its iteration limit ({count} of {max_iterations}) still "
+                "moving: start nearer the answer (--initial P.csv: a table of this unit, or `casadi-sins rough`'s "
+                "values edited) or allow more (--max-iterations)")
+    if status == "Gauss_Newton_Not_Settled":
+        return (f"the Gauss-Newton steps from the rough values fitted to the data did not settle in {count} steps "
+                f"(the last {stats.get('last_step', float('nan')):.3g} sigma): the start is too far from the answer "
+                "or the segments hold motion as rest; check the segments (casadi-sins segment), start nearer "
+                "(--initial P.csv) or allow more (--max-iterations)")
+    return (f"Ipopt did not converge: {status} after {count} iterations (the iterates diverged or the steps "
+            "failed): start nearer the answer (--initial P.csv), check the segment times against the data "
+            "(casadi-sins validate, segment)")
 
 
 #: Ipopt at its iteration cap has converged for our purpose when the objective moved less than this (relative)

@@ -32,7 +32,7 @@ from ...model.parameters import ParameterSet
 from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
 from ...noise.motion import describe_motion
 from ...noise.plan import NoisePlan, plan_noise
-from ..initial import rough_parameters
+from ..initial import resolves_earth_rate, rough_parameters
 from ..limits import SCHEDULE_REMEDY, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
@@ -44,6 +44,7 @@ from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_s
 from .ipopt import quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import model_groups, model_label, select_groups, unobservable_group
+from .start import presolve, start_vector
 from .wander import estimate_bias_wander
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
@@ -73,13 +74,16 @@ class _Run:
     wander: dict = dataclasses.field(default_factory=dict)
     evidence: dict | None = None
     evidence_named: bool = False
+    start: str = "ipopt"  # or "gauss-newton": stage 1 from a start fitted to the data (.start)
 
     def say(self, message: str) -> None:
         if self.progress:
             self.progress(f"nlp: {message}")
 
     def build(self, names) -> ResidualGraph:
-        graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
+        # the 21 of the start, the extra terms at their prior: the reference the information criterion tests against
+        reference = ParameterSet(self.initial.values[:N_PARAMS]).aligned(names)
+        graph = build_graph(self.rec, reference, self.observe_s, self.rotation_step_s,
                             self.static_step_s, names)
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
@@ -88,16 +92,21 @@ class _Run:
 
     def fit(self, graph: ResidualGraph, use_rotation_steps: bool) -> Fit:
         solve = dict(self.solve)
+        presolved, x0 = None, start_vector(graph, self.initial)
+        if self.start == "gauss-newton":
+            presolved = presolve(self.rec, graph, self.noise_plan, use_rotation_steps, solve["max_iterations"],
+                                 self.progress, x0)
         if solve["max_iterations"] is None:
             solve["max_iterations"] = max(200, 20 * graph.n_variables)
-        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress, **solve)
+        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress,
+                         presolved=presolved, x0=x0, **solve)
 
 
 def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
                   static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
                   use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int | None = None,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
-                  static_step_s: float | None = None, model="21") -> CalibrationResult:
+                  static_step_s: float | None = None, model=None) -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
 
     Parameters
@@ -131,11 +140,13 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
     static_step_s : float, optional
         Navigation step in static segments (default: the observation spacing; on a swaying base
         :data:`steps.SWAY_STATIC_STEP_S`).
-    model : {"21", "extended", "auto"} or tuple of group keys
+    model : {"21", "extended", "auto"}, tuple of group keys, or None
         The parameters: the paper's 21; with every extra group of the registry (quadratic scale, lever arms,
         time offset); or ``"auto"``: the extra groups the data support (each group's Wald statistic in the
         extended fit against the Bayesian information criterion ``k ln n``), refitted with those alone.
-        Terms not estimated stay at their prior (0).
+        Terms not estimated stay at their prior (0).  None (the default): by the unit's grade, ``"21"`` when
+        its gyros resolve the Earth rate (:func:`initial.resolves_earth_rate`), else ``"auto"``: a MEMS unit's
+        gyro g-sensitivity, left out, would bias the 21 far beyond their sigma.
 
     Raises
     ------
@@ -160,6 +171,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     t_start = time.perf_counter()
     observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
+    navigation_grade = resolves_earth_rate(rec, initial.values)
+    model = model if model is not None else ("21" if navigation_grade else "auto")
     groups = model_groups(model)
     noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
     noise_s = time.perf_counter() - t_start
@@ -168,6 +181,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
                list(rec.warnings), t_start, noise_s)
+    if not navigation_grade or any(s.is_free for s in rec.segments):
+        run.start = "gauss-newton"  # Ipopt's quick weights miss a MEMS unit's tilt random walk (.start)
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
     return run

@@ -83,7 +83,7 @@ def rough_parameters(rec: Recording) -> ParameterSet:
     """
     dt = rec.dt
     means = _static_means(rec, rec.accel)
-    if any(s.is_free for s in rec.segments) or _offset(means, rec):
+    if starts_from_the_data(rec):
         return fitted_parameters(rec)
     values = np.zeros(N_PARAMS)
     values[ACCEL_SCALE] = _magnitude_scale(means, rec.site.g * dt, "accelerometer", rec)
@@ -147,6 +147,13 @@ def resolves_earth_rate(rec: Recording, values: np.ndarray) -> bool:
     horizontal = EARTH_RATE * max(math.cos(rec.site.latitude), 0.1)
     return bool(np.median(rates) <= BIAS_EARTH_RATIO * EARTH_RATE
                 and (not noise or np.median(noise) <= EARTH_RATE_NOISE_SHARE * horizontal))
+
+
+def starts_from_the_data(rec: Recording) -> bool:
+    """Whether the rough values are fitted to the data (:func:`fitted_parameters`) rather than the paper's: a
+    session by hand (a rest without letters or a move without a nominal angle), or accelerometers whose rests read
+    no common magnitude (an offset)."""
+    return any(s.is_free for s in rec.segments) or _offset(_static_means(rec, rec.accel), rec)
 
 
 def _offset(means: np.ndarray, rec: Recording) -> bool:

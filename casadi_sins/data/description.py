@@ -70,6 +70,15 @@ def read_recording(path: str | Path) -> Recording:
     rate_warning = check_rate(time, head["rate_hz"], data_path)
     if rate_warning:
         rec.warnings.append(rate_warning)
+    if not rec.segments:  # the format allows no [[segments]]: the schedule is found from the samples
+        from .segmentation import segment_recording  # noqa: PLC0415 (the search loads only when it is needed)
+
+        try:
+            found, notes = segment_recording(time, rec.gyro, rec.accel, rec.rate_hz, rec.site, rec.name)
+        except InputError as exc:
+            raise InputError(path, f"no [[segments]], and none found in the samples: {exc.reason}") from None
+        rec.segments = found.segments
+        rec.notes = [f"{path}: no [[segments]]: the schedule was found from the samples"] + notes
     validate_schedule(rec)
     check_physical_range(rec, data_path)
     return rec
@@ -146,8 +155,11 @@ def _parse_site(site, path: Path) -> Site:
 
 
 def _parse_segments(items, path: Path, lines: list[int]) -> list[Segment]:
+    if items is None:
+        return []  # no schedule: it is to be found from the samples (read_recording)
     if not isinstance(items, list) or not items:
-        raise InputError(path, "no [[segments]]")
+        raise InputError(path, "[[segments]] must be an array of tables (or left out: the schedule is then found "
+                               "from the samples)")
     return [_parse_segment(item, number, path, lines[number - 1] if number <= len(lines) else None)
             for number, item in enumerate(items, start=1)]
 

@@ -30,8 +30,13 @@ from ..core.rotations import rotation_matrices
 from ..model.registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GYRO_BIAS,
                               GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, NAMES)
 
-#: Rests the accelerometers' nine parameters need; with fewer the misalignments stay 0 (six parameters).
+#: Rests the accelerometers' nine parameters need; with fewer the misalignments stay 0 (six parameters), and with
+#: more too when the nine-parameter problem's smallest singular value is under this share of its largest (rests
+#: along the body axes alone show no misalignment).
 MISALIGNMENT_RESTS = 12
+MISALIGNMENT_CONDITION = 1e-4
+#: The algebraic ellipsoid is taken when its smallest singular value stands this far below the next one.
+ALGEBRAIC_SEPARATION = 0.1
 #: Fewest rests of a session by hand: the accelerometers' nine parameters from gravity's magnitude alone need
 #: nine, and IMU-TK (Tedaldi et al. 2014) asks for at least twelve; its protocol has 30-40.
 MIN_HAND_RESTS = 12
@@ -93,12 +98,15 @@ def _lower(misalignment) -> np.ndarray:
 
 def _algebraic_ellipsoid(means: np.ndarray, g: float, dt: float):
     """Scale factors and biases of an axis-aligned ellipsoid through the means (``a n^2 + c n + e = 0``, the
-    smallest singular vector), or None when the rests do not determine one."""
+    smallest singular vector), or None when the rests do not single one out (fewer than seven, a second
+    solution as good: rests along the axes only)."""
     design = np.column_stack([means**2, means, np.ones(len(means))])
     norm = np.linalg.norm(design, axis=0)
     if len(means) < 7 or np.any(norm == 0):
         return None
     _, s, vt = np.linalg.svd(design / norm, full_matrices=False)
+    if s[-1] > ALGEBRAIC_SEPARATION * s[-2]:
+        return None
     coef = vt[-1] / norm
     a, c, e = coef[:3], coef[3:6], coef[6]
     if np.all(a < 0):
@@ -113,8 +121,21 @@ def _algebraic_ellipsoid(means: np.ndarray, g: float, dt: float):
     return scale, scale * centre / dt
 
 
+def _magnitude_start(means: np.ndarray, g: float, dt: float):
+    """Scale factors with ``|S n| = g dt`` over the rests, no bias (the paper's rough values), or None."""
+    design = means**2
+    if np.linalg.matrix_rank(design) < 3:
+        return None
+    u = np.linalg.lstsq(design, np.full(len(means), (g * dt) ** 2), rcond=None)[0]
+    return (np.sqrt(u), np.zeros(3)) if np.all(u > 0) else None
+
+
 def fit_accelerometers(means: np.ndarray, weights: np.ndarray, g: float, dt: float) -> AccelFit:
     """The accelerometers' model from the rests' mean pulses per sample (module docstring).
+
+    Biases and scale factors first, from the algebraic ellipsoid or, when the rests do not single one out,
+    from gravity's magnitude without bias; then the misalignments too when the rests determine them (the
+    nine-parameter problem's conditioning: rests only along the body axes leave them at 0).
 
     Parameters
     ----------
@@ -132,28 +153,42 @@ def fit_accelerometers(means: np.ndarray, weights: np.ndarray, g: float, dt: flo
     from scipy.optimize import least_squares  # noqa: PLC0415 (scipy's optimiser only for a session by hand)
 
     means, weights = np.asarray(means, float), np.asarray(weights, float)
-    start = _algebraic_ellipsoid(means, g, dt)
-    if start is None:  # a sphere of the offsets: one common size
+    starts = [x for x in (_algebraic_ellipsoid(means, g, dt), _magnitude_start(means, g, dt)) if x is not None]
+    if not starts or len(means) < 6:
         raise ValueError("the rests' accelerometer means do not lie on an ellipsoid")
-    scale0, bias0 = start
-    count = 9 if len(means) >= MISALIGNMENT_RESTS else 6
 
-    def model(x):
-        scale = scale0 * (1.0 + x[:3])
-        bias = bias0 + g * x[3:6]
-        k = _lower(x[6:9] if count == 9 else np.zeros(3))
-        force = np.linalg.solve(k, (means * scale / dt - bias).T).T
-        return scale, bias, force
+    def solve(scale0, bias0, count):
+        def model(x):
+            scale = scale0 * (1.0 + x[:3])
+            bias = bias0 + g * x[3:6]
+            k = _lower(x[6:9] if count == 9 else np.zeros(3))
+            return scale, bias, np.linalg.solve(k, (means * scale / dt - bias).T).T
 
-    def residuals(x):
-        return weights * (np.linalg.norm(model(x)[2], axis=1) - g) / g
+        def residuals(x):
+            return weights * (np.linalg.norm(model(x)[2], axis=1) - g) / g
 
-    solution = least_squares(residuals, np.zeros(count), method="trf", loss="soft_l1",
-                             f_scale=0.01 * float(np.median(weights)), x_scale=np.full(count, 1e-2))
-    scale, bias, force = model(solution.x)
+        solution = least_squares(residuals, np.zeros(count), method="trf", loss="soft_l1",
+                                 f_scale=0.01 * float(np.median(weights)), x_scale=np.full(count, 1e-2))
+        return solution, model(solution.x)
+
+    # a fit that puts every rest's force in one direction (a tiny scale, gravity in the bias) is degenerate
+    fits = [f for f in (solve(scale0, bias0, 6) for scale0, bias0 in starts)
+            if np.all(f[1][0] > 0) and spread_deg(_unit(f[1][2])) >= MIN_SPREAD_DEG]
+    if not fits:
+        raise ValueError("the rests' accelerometer means do not lie on an ellipsoid")
+    solution, (scale, bias, force) = min(fits, key=lambda f: f[0].cost)
+    if len(means) >= MISALIGNMENT_RESTS:
+        wide, wide_model = solve(scale, bias, 9)
+        singular = np.linalg.svd(wide.jac, compute_uv=False)
+        if singular[-1] > MISALIGNMENT_CONDITION * singular[0]:
+            solution, (scale, bias, force) = wide, wide_model
     misfit = float(np.sqrt(np.mean((np.linalg.norm(force, axis=1) - g) ** 2)))
-    misalignment = solution.x[6:9] if count == 9 else np.zeros(3)
-    return AccelFit(scale, bias, misalignment, force / np.linalg.norm(force, axis=1, keepdims=True), misfit)
+    misalignment = solution.x[6:9] if len(solution.x) == 9 else np.zeros(3)
+    return AccelFit(scale, bias, misalignment, _unit(force), misfit)
+
+
+def _unit(rows: np.ndarray) -> np.ndarray:
+    return rows / np.maximum(np.linalg.norm(rows, axis=1, keepdims=True), 1e-300)
 
 
 def spread_deg(up: np.ndarray) -> float:

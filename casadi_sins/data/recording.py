@@ -87,6 +87,9 @@ class Recording:
         The description's ``[conditions]`` (empty when not given).
     temperature : ndarray (N,) or None
         The CSV's optional ``temperature`` column, degC.
+    notes : list of str
+        What was found or assumed in reading it, without doubt (a schedule found from the samples, when the
+        description has no segments); doubts are ``warnings``.
     """
 
     name: str
@@ -100,6 +103,7 @@ class Recording:
     warnings: list[str] = dataclasses.field(default_factory=list)  # doubts about the data, for the reports
     conditions: Conditions = dataclasses.field(default_factory=Conditions)
     temperature: np.ndarray | None = None  # degC per sample, when the CSV has the column
+    notes: list[str] = dataclasses.field(default_factory=list)  # what was found or assumed (a schedule found), no doubt
 
     @property
     def dt(self) -> float:

@@ -281,6 +281,8 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
         segments, notes = _detect_any(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
+    if any(s.is_free for s in rec.segments):  # the rests as the calibration's check of them leaves them
+        rec = dataclasses.replace(refine(rec, min_rest_s=rec.dt), warnings=[])
     return rec, notes
 
 

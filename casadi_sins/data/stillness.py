@@ -207,15 +207,19 @@ def _without_spins(gyro: np.ndarray, spans, quiet_gyro: np.ndarray):
     return kept, [s for s, d in zip(spans, off) if d > limit]
 
 
-def motion_mask(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, rests) -> np.ndarray:
-    """Per sample, whether the unit moves, judged against the stated rests' own levels: the activity above
-    :data:`QUIET_SPREAD` times the median activity of the rest it belongs to (outside every rest: above the
-    sure-motion level), whatever the offset.  ``rests`` are ``(first, stop)`` sample ranges."""
-    act, _ = activity(gyro, accel, rate_hz)
-    sure = max(SURE_MOTION, MOTION_SHARE * float(np.percentile(act, 99.0))) if len(act) else SURE_MOTION
-    moving = act > sure
-    for a, b in rests:
-        if b > a:
-            own = float(np.median(act[a:b]))
-            moving[a:b] = act[a:b] > min(QUIET_SPREAD * max(own, 1.0), sure)
-    return moving
+def rest_baseline(pulses: np.ndarray, rests) -> np.ndarray:
+    """Each sample's resting level (N, channels): in a rest its own median, between two rests the line from the
+    one's to the next's (before the first and after the last, theirs): what the pulses read at rest, offset,
+    bias and Earth rate included, to be taken off before the size of the motion is judged.  ``rests`` are
+    ``(first, stop)`` sample ranges in time order; without any, the recording's median."""
+    pulses = np.asarray(pulses, dtype=float)
+    rests = [(a, b) for a, b in rests if b > a]
+    if not rests:
+        return np.broadcast_to(np.median(pulses, axis=0), pulses.shape)
+    levels = np.array([np.median(pulses[a:b], axis=0) for a, b in rests])
+    centres = np.array([0.5 * (a + b - 1) for a, b in rests])
+    index = np.arange(len(pulses), dtype=float)
+    out = np.column_stack([np.interp(index, centres, levels[:, k]) for k in range(pulses.shape[1])])
+    for (a, b), level in zip(rests, levels):
+        out[a:b] = level
+    return out

@@ -47,6 +47,10 @@ from .selection import model_groups, model_label, select_groups, unobservable_gr
 from .start import presolve, start_vector
 from .wander import estimate_bias_wander
 
+#: The default model of a MEMS unit moved by hand: the 21 and the gyro g-sensitivity (a MEMS gyro's is hundreds of
+#: deg/h per g; in a rest of seconds it tilts the unit by tenths of a degree).
+HAND_MEMS_MODEL = ("gyro_gsens",)
+
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
                  "W from the noise model (raw-data estimate, datasheet, fit, bias wander of the static data), times the variance factor when "
                  "the residuals exceed the model")
@@ -96,6 +100,9 @@ class _Run:
         if self.start == "gauss-newton":
             presolved = presolve(self.rec, graph, self.noise_plan, use_rotation_steps, solve["max_iterations"],
                                  self.progress, x0)
+            if not presolved[1]["success"]:  # a misfit's flat valley: Ipopt, with its rule for a stalled objective
+                self.say("the Gauss-Newton steps did not settle: Ipopt goes on from where they got")
+                presolved, x0 = None, presolved[0]
         if solve["max_iterations"] is None:
             solve["max_iterations"] = max(200, 20 * graph.n_variables)
         return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress,
@@ -144,9 +151,11 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
         The parameters: the paper's 21; with every extra group of the registry (quadratic scale, lever arms,
         time offset); or ``"auto"``: the extra groups the data support (each group's Wald statistic in the
         extended fit against the Bayesian information criterion ``k ln n``), refitted with those alone.
-        Terms not estimated stay at their prior (0).  None (the default): by the unit's grade, ``"21"`` when
-        its gyros resolve the Earth rate (:func:`initial.resolves_earth_rate`), else ``"auto"``: a MEMS unit's
-        gyro g-sensitivity, left out, would bias the 21 far beyond their sigma.
+        Terms not estimated stay at their prior (0).  None (the default): ``"21"``, and the 21 with the gyro
+        g-sensitivity (:data:`HAND_MEMS_MODEL`) for a MEMS unit (gyros that do not resolve the Earth rate,
+        :func:`initial.resolves_earth_rate`) moved by hand (rests at any orientation, free moves): its
+        g-sensitivity, left out, would bias the 21 far beyond their sigma, and the rests at many orientations
+        determine it.
 
     Raises
     ------
@@ -171,8 +180,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     t_start = time.perf_counter()
     observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
-    navigation_grade = resolves_earth_rate(rec, initial.values)
-    model = model if model is not None else ("21" if navigation_grade else "auto")
+    mems_by_hand = any(s.is_free for s in rec.segments) and not resolves_earth_rate(rec, initial.values)
+    model = model if model is not None else (HAND_MEMS_MODEL if mems_by_hand else "21")
     groups = model_groups(model)
     noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
     noise_s = time.perf_counter() - t_start
@@ -181,8 +190,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
                list(rec.warnings), t_start, noise_s)
-    if not navigation_grade or any(s.is_free for s in rec.segments):
-        run.start = "gauss-newton"  # Ipopt's quick weights miss a MEMS unit's tilt random walk (.start)
+    if mems_by_hand:
+        run.start = "gauss-newton"  # near the answer, and Ipopt's quick weights miss a MEMS unit's tilt walk (.start)
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
     return run

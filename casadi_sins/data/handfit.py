@@ -46,6 +46,8 @@ MIN_SPREAD_DEG = 30.0
 #: A move that turns more than this in one sample (deg) is too fast for the sample rate: the sample-by-sample
 #: navigation of the calibration (its coning terms) is no longer a small-angle step.
 MAX_STEP_DEG = 15.0
+#: Samples whose pulses are summed in the search for the gyros' common pulse size (then half as many).
+SEARCH_BLOCK = 4
 #: Resting gyro rates this many times the Earth rate are a bias (a MEMS unit): the rough bias is the rests' mean.
 BIAS_EARTH_RATIO = 10.0
 
@@ -208,6 +210,14 @@ def _moves(gyro: np.ndarray, rests, bias_pulses: np.ndarray):
     return out, np.array([b - a for a, b in spans])
 
 
+def _summed(pulses: np.ndarray, block: int) -> np.ndarray:
+    """The moves' pulses summed over ``block`` samples: (moves, ceil(L / block), 3)."""
+    moves, length, _ = pulses.shape
+    padded = np.zeros((moves, -(-length // block) * block, 3))
+    padded[:, :length] = pulses
+    return padded.reshape(moves, -1, block, 3).sum(axis=2)
+
+
 def _carry(pulses: np.ndarray, matrices: np.ndarray, sensitivity: bool = False):
     """The rotation of each move (body at its start to body at its end) for each candidate ``M``:
     ``pulses`` (moves, L, 3), ``matrices`` (C, 3, 3) -> (C, moves, 3, 3); with ``sensitivity`` (one ``M``)
@@ -251,13 +261,14 @@ def fit_gyros(gyro: np.ndarray, rests, up: np.ndarray, iterations: int = 8) -> G
     paths = np.linalg.norm(pulses, axis=2).sum(axis=1)
     if not len(paths) or paths.max() <= 0:
         raise ValueError("the gyros show no motion between the rests")
-    # one common size: turns of 10 deg to 10 turns along the longest path, coarse then fine
-    sizes = np.geomspace(math.radians(10.0) / paths.max(), math.radians(3600.0) / paths.max(), 60)
-    for _ in range(2):
-        turn, _ = _carry(pulses, sizes[:, None, None] * np.eye(3))
+    # one common size: turns of 10 deg to 10 turns along the longest path, coarse then fine, on pulses summed over
+    # a few samples (a search for the size needs no coning)
+    sizes = np.geomspace(math.radians(10.0) / paths.max(), math.radians(3600.0) / paths.max(), 40)
+    for block, count in ((SEARCH_BLOCK, 11), (SEARCH_BLOCK // 2, 0)):
+        turn, _ = _carry(_summed(pulses, block), sizes[:, None, None] * np.eye(3))
         cost = np.sum(_misses(turn, up) ** 2, axis=(1, 2))
         best = float(sizes[int(np.argmin(cost))])
-        sizes = np.geomspace(best / 1.1, best * 1.1, 15)
+        sizes = np.geomspace(best / 1.1, best * 1.1, count)
     matrix = best * np.eye(3)
     prior = 0.3 * best  # a weak prior on M about the common size: a direction no move shows stays near it
     for _ in range(iterations):

@@ -33,7 +33,7 @@ from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
 from ...noise.motion import describe_motion
 from ...noise.plan import NoisePlan, plan_noise
 from ..initial import resolves_earth_rate, rough_parameters
-from ..limits import SCHEDULE_REMEDY, separation_warnings
+from ..limits import SCHEDULE_REMEDY, grade_levels, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from ..wander import describe, natural_size, record, with_wander
@@ -365,7 +365,8 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     params = ParameterSet(values, covariance=covariance, names=names)
     remedy = ("their sigma carries the misfit of the terms outside the model named above (--model auto), not "
               "the schedule") if run.evidence_named else SCHEDULE_REMEDY
-    separation_checks, separation_text = separation_warnings(params, run.wander, remedy)
+    separation_checks, separation_text = separation_warnings(params, run.wander, remedy,
+                                                             grade_levels(names, model, rec))
     assessment.checks += separation_checks
     assessment.warnings += separation_text
     warnings = run.warnings + run.noise_plan.warnings + assessment.warnings  # shown once, with the result

@@ -8,15 +8,15 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
    moving window (:data:`WINDOW_S`) against the channel's quiet level (a low percentile of that deviation
    over the recording: the sensor noise and any tremor); the largest ratio of the six is the activity.
    A move by hand changes the rates by tens of deg/s within a window, far above it.
-2. **Candidate rests.**  Stretches between *sure motion* (activity above :data:`SURE_MOTION`, or above a
-   share of the recording's moves) that last long enough.
+2. **Candidate rests.**  Stretches between *sure motion* (activity above the split of its logarithm into rests
+   and moves, Otsu's threshold, and at least :data:`SURE_MOTION`) that last long enough.
 3. **The rest's own noise.**  Within each stretch the quiet samples are those whose activity stays within
    :data:`QUIET_SPREAD` times the stretch's own median activity (the threshold follows the measured rest
    noise: a trembling hand raises it, a unit put down lowers it); each run of quiet samples is a rest.
-4. **Slow ends.**  A move ends slowly: the rate creeps back to rest, too smoothly to raise the moving
-   deviation.  Each rest's ends are cut where the mean of any channel over :data:`CREEP_WINDOW_S` departs from
-   the rest's own mean (its middle half's) by more than :data:`CREEP_SIGMAS` times the scatter of such means in
-   that middle (sensor noise and tremor alike); then placed at the fitted onset of the motion beside it
+4. **Slow ends.**  A move ends slowly: the hand settles, the rate creeps back to rest, too smoothly to raise
+   the moving deviation.  The gyro-integrated angle shows it: with the rest's own mean rate taken off it follows
+   a line (the angle random walk and the tremor about it) over the stretch beside each end; the end is cut
+   where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its scatter there; then placed at the fitted onset of the motion beside it
    (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle departs from
    the rest's line, which takes any offset; the slow start of a move shows there first).
 5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
@@ -43,16 +43,17 @@ MIN_WINDOW = 5
 #: Percentile of the moving deviation taken as a channel's quiet level, and the ratio of that percentile of a
 #: sample deviation to its median under white noise (21 samples: 0.83), so that the level is the typical one.
 QUIET_PERCENTILE = 10.0
-#: Activity that is surely motion: this many times the quiet level, or this share of the recording's moves
-#: (the 99th percentile of the activity), whichever is larger.
+#: Activity that is surely motion: at least this many times the quiet level, and above the best split of the
+#: activity's logarithm into rests and moves (Otsu's threshold over this many bins).
 SURE_MOTION = 8.0
-MOTION_SHARE = 0.05
+OTSU_BINS = 100
 #: Quiet samples of a stretch: activity within this many times the stretch's own median activity.
 QUIET_SPREAD = 2.5
-#: A rest's end is cut where a channel's mean over this many seconds departs from the rest's mean by more than
-#: this many times the scatter of such means in the middle of the rest.
-CREEP_WINDOW_S = 1.0
-CREEP_SIGMAS = 3.5
+#: A rest's ends (this many seconds, at most a quarter of it) are cut where its gyro-integrated angle strays from
+#: the line of the stretch beside by more than this many times its scatter about that line (fewer samples: left).
+CREEP_S = 1.5
+CREEP_SIGMAS = 6.0
+MIN_CREEP_SAMPLES = 10
 #: A rest whose mean gyro rate stands off the median of the rests by more than this many times their spread
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
 RATE_OUTLIER = 10.0
@@ -128,6 +129,24 @@ def activity(gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> tuple[np.nd
     return np.max(deviation / floor, axis=1), floor
 
 
+def sure_motion(act: np.ndarray) -> float:
+    """The activity above which a sample surely moves: the split of the activity's logarithm into rest and motion
+    that best separates the two (Otsu's threshold: a trembling hand's rests sit below it, the moves above), and
+    at least :data:`SURE_MOTION`."""
+    if not len(act):
+        return SURE_MOTION
+    logs = np.log(np.maximum(act, 1e-3))
+    counts, edges = np.histogram(logs, bins=OTSU_BINS)
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    weight = np.cumsum(counts)
+    moment = np.cumsum(counts * centres)
+    total, mean = weight[-1], moment[-1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        between = (mean * weight - total * moment) ** 2 / (weight * (total - weight))
+    best = int(np.nanargmax(between[:-1])) if len(between) > 1 else 0
+    return max(SURE_MOTION, float(np.exp(edges[best + 1])))
+
+
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
     return [(int(a), int(b)) for a, b in zip(edges[0::2], edges[1::2])]
@@ -138,10 +157,8 @@ def find_rests(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, shortest_s: 
     ``shortest_s`` long."""
     gyro, accel = np.asarray(gyro, dtype=float), np.asarray(accel, dtype=float)
     act, level = activity(gyro, accel, rate_hz)
-    sure = max(SURE_MOTION, MOTION_SHARE * float(np.percentile(act, 99.0))) if len(act) else SURE_MOTION
+    sure = sure_motion(act)
     shortest = max(1, int(math.ceil(shortest_s * rate_hz - 1e-9)))
-    width = window_samples(rate_hz)
-    pulses = np.column_stack([gyro, accel])
     track = angle_track(gyro)
     spans: list[tuple[int, int]] = []
     for a, b in _runs(act <= sure):
@@ -150,7 +167,7 @@ def find_rests(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, shortest_s: 
         own = float(np.median(act[a:b]))
         for qa, qb in _runs(act[a:b] <= QUIET_SPREAD * max(own, 1.0)):
             if qb - qa >= shortest:
-                first, stop = _without_creep(pulses, a + qa, a + qb, width)
+                first, stop = _without_creep(gyro, a + qa, a + qb, rate_hz)
                 first, stop = _at_onsets(track, first, stop, a, b, len(gyro), rate_hz)
                 if stop - first >= shortest:
                     spans.append((first, stop))
@@ -158,26 +175,36 @@ def find_rests(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, shortest_s: 
     return Rests(spans, level, act, sure, turning)
 
 
-def _without_creep(pulses: np.ndarray, first: int, stop: int, width: int) -> tuple[int, int]:
-    """A quiet run cut where a channel's mean over :data:`CREEP_WINDOW_S` (at most an eighth of the run) creeps
-    off the rest's own mean (step 4): the first window from each end whose mean lies within
-    :data:`CREEP_SIGMAS` times the scatter of such window means in the rest's middle half."""
-    n = stop - first
-    span = min(int(round(CREEP_WINDOW_S * width / WINDOW_S)), n // 8)
-    if span < max(2, width // 2):  # too short for a middle to measure the scatter in: the moving deviation decided
-        return first, stop
-    part = pulses[first:stop]
-    part = part - np.median(part, axis=0)
-    c = np.cumsum(np.concatenate([np.zeros((1, part.shape[1])), part]), axis=0)
-    ahead = (c[span:] - c[:-span]) / span  # mean over [k, k + span), k = 0 .. n - span
-    lo_mid, hi_mid = n // 4, n - n // 4
-    mean = part[lo_mid:hi_mid].mean(axis=0)
-    scatter = np.std(ahead[lo_mid:hi_mid - span + 1], axis=0) + 1e-12 * (np.max(np.abs(part), axis=0) + 1e-300)
-    calm = np.all(np.abs(ahead - mean) <= CREEP_SIGMAS * scatter, axis=1)
-    good = np.flatnonzero(calm)
-    if not len(good):
-        return first, first
-    return first + int(good[0]), first + int(good[-1]) + span
+def _without_creep(gyro: np.ndarray, first: int, stop: int, rate_hz: float) -> tuple[int, int]:
+    """A quiet run cut where the hand still creeps (step 4): near each end (:data:`CREEP_S`, at most a quarter of
+    the run) the gyro-integrated angle, the rest's own mean rate taken off, must keep to the line it follows over
+    the stretch beside (twice as long) within :data:`CREEP_SIGMAS` times its scatter about that line there
+    (angle random walk and tremor alike); the rest begins after the last sample that strays further, and ends
+    likewise (again, while a whole stretch tested strays)."""
+    cut = True
+    while cut:  # a creep longer than the stretch tested is cut piece by piece
+        n = stop - first
+        span = min(int(round(CREEP_S * rate_hz)), n // 4)
+        if span < MIN_CREEP_SAMPLES:
+            break
+        part = gyro[first:stop] - np.median(gyro[first:stop], axis=0)
+        head, tail = _creep_end(part[:3 * span], span), _creep_end(part[::-1][:3 * span], span)
+        first, stop = first + head, max(first + head, stop - tail)
+        cut = head == span or tail == span
+    return first, stop
+
+
+def _creep_end(rates: np.ndarray, span: int) -> int:
+    """The first sample after which the angle of ``rates`` (rows, near end first) keeps to the line of its samples
+    ``span`` and on (their mean rate taken off)."""
+    track = np.cumsum(rates - rates[span:].mean(axis=0), axis=0)
+    k = np.arange(len(track), dtype=float)
+    design = np.column_stack([np.ones(len(track)), k])
+    coef = np.linalg.lstsq(design[span:], track[span:], rcond=None)[0]
+    residual = track - design @ coef
+    scatter = np.std(residual[span:], axis=0) + 1e-12 * (np.max(np.abs(track), axis=0) + 1e-300)
+    stray = np.flatnonzero(np.any(np.abs(residual[:span]) > CREEP_SIGMAS * scatter, axis=1))
+    return int(stray[-1]) + 1 if len(stray) else 0
 
 
 def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: int, n: int, rate_hz: float):

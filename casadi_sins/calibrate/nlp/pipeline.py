@@ -133,7 +133,9 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
     use_rotation_steps : bool or "auto"
         Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
         static residuals (F-test, :data:`diagnostics.STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets
-        of a real unit make velocity steps that the 21-parameter model cannot explain.
+        of a real unit make velocity steps that the 21-parameter model cannot explain.  A session by hand keeps
+        them (without them its rests' velocities are free and the accelerometers undetermined): a misfit there
+        is an error outside the model.
     tolerance : float
         Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
     max_iterations : int, optional
@@ -218,6 +220,10 @@ def _observable_graph(run: _Run) -> ResidualGraph:
 def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[ResidualGraph, Fit]:
     """Stage 3: fit with the velocity steps across rotations (dropped when unmodelled), and model selection."""
     modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
+    if use_rotation_steps == "auto" and any(s.is_free for s in run.rec.segments):
+        # a session by hand without its velocity steps across the moves leaves each rest's velocity free: the
+        # accelerometers would go undetermined; a misfit there is an error outside the model (stage 4) instead
+        modes = [True]
     for mode in modes:
         if not mode:  # without the steps across rotations only the groups that need no steps remain observable
             kept = tuple(g for g in groups_in(graph.names) if not GROUPS[g].needs_rotation_steps)

@@ -6,8 +6,8 @@ by hand has none of these, and the calibration needs none: it navigates the meas
 with each group's start attitude free.  So a session by hand is described by its rests alone:
 
 1. rests: from the changes of the signals against each rest's own noise, any offset, slow ends of moves
-   excluded (:func:`data.stillness.find_rests`), at least the shortest rest the edges' fit needs
-   (:data:`data.edges.ONSET_REST_S` each side, a few samples besides);
+   excluded (:func:`data.stillness.find_rests`), at least :data:`HAND_REST_S` (a shorter pause is part of a
+   move) and what the edges' fit needs (:data:`data.edges.ONSET_REST_S` each side, a few samples besides);
 2. the rough sensor models from those rests and the moves between them (:mod:`data.handfit`): the
    accelerometers' ellipsoid gives each rest's gravity direction, the gyros carry it from rest to rest;
 3. every rest becomes a static segment without orientation letters, every move between two a rotation without
@@ -33,11 +33,15 @@ from .stillness import Rests, find_rests
 #: A move whose gyro-carried gravity direction misses the next rest's by more than this (deg) is no part of the
 #: chain: its group ends there.  A MEMS gyro's noise and g-sensitivity leave well under a degree in a move.
 MAX_MISS_DEG = 10.0
+#: The shortest rest of a session by hand (s): a pause in a move shorter than this is no rest (IMU-TK takes
+#: static intervals of at least 100 samples, a second at 100 Hz).
+HAND_REST_S = 1.0
 
 
 def shortest_hand_rest(rate_hz: float) -> float:
-    """The shortest rest of a session by hand (s): the onset fit's rest on each side and a few samples."""
-    return 2.0 * ONSET_REST_S + 3.0 / rate_hz
+    """The shortest rest of a session by hand (s): :data:`HAND_REST_S`, and at least the onset fit's rest on each
+    side and a few samples."""
+    return max(HAND_REST_S, 2.0 * ONSET_REST_S + 3.0 / rate_hz)
 
 
 def rest_means(pulses: np.ndarray, spans) -> tuple[np.ndarray, np.ndarray]:

@@ -16,7 +16,8 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
 4. **Slow ends.**  A move ends slowly: the hand settles, the rate creeps back to rest, too smoothly to raise
    the moving deviation.  The gyro-integrated angle shows it: with the rest's own mean rate taken off it follows
    a line (the angle random walk and the tremor about it) over the stretch beside each end; the end is cut
-   where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its scatter there; then placed at the fitted onset of the motion beside it
+   where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its spread (its scatter about
+   the line there, and the random walk it takes so far off); then placed at the fitted onset of the motion beside it
    (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle departs from
    the rest's line, which takes any offset; the slow start of a move shows there first).
 5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
@@ -43,6 +44,8 @@ MIN_WINDOW = 5
 #: Percentile of the moving deviation taken as a channel's quiet level, and the ratio of that percentile of a
 #: sample deviation to its median under white noise (21 samples: 0.83), so that the level is the typical one.
 QUIET_PERCENTILE = 10.0
+#: A channel's quiet level is at least this share of the 99th percentile of its moving deviation (the moves').
+MOTION_CONTRAST = 1e-3
 #: Activity that is surely motion: at least this many times the quiet level, and above the best split of the
 #: activity's logarithm into rests and moves (Otsu's threshold over this many bins).
 SURE_MOTION = 8.0
@@ -50,9 +53,9 @@ OTSU_BINS = 100
 #: Quiet samples of a stretch: activity within this many times the stretch's own median activity.
 QUIET_SPREAD = 2.5
 #: A rest's ends (this many seconds, at most a quarter of it) are cut where its gyro-integrated angle strays from
-#: the line of the stretch beside by more than this many times its scatter about that line (fewer samples: left).
+#: the line of the stretch beside by more than this many times a random walk's spread (fewer samples: left).
 CREEP_S = 1.5
-CREEP_SIGMAS = 6.0
+CREEP_SIGMAS = 5.0
 MIN_CREEP_SAMPLES = 10
 #: A rest whose mean gyro rate stands off the median of the rests by more than this many times their spread
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
@@ -125,7 +128,9 @@ def activity(gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> tuple[np.nd
     width = window_samples(rate_hz)
     deviation = moving_deviation(np.column_stack([gyro, accel]), width)
     level = np.percentile(deviation, QUIET_PERCENTILE, axis=0)
-    floor = np.maximum(level, 1e-12 * np.maximum(np.max(deviation, axis=0), 1e-300))  # a channel that never changes
+    # at least a share of the moves' level: a channel whose noise is below its pulses' resolution (a navigation-grade
+    # gyro written to a few digits) reads no change at rest at all
+    floor = np.maximum(level, MOTION_CONTRAST * np.maximum(np.percentile(deviation, 99.0, axis=0), 1e-300))
     return np.max(deviation / floor, axis=1), floor
 
 
@@ -178,9 +183,9 @@ def find_rests(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, shortest_s: 
 def _without_creep(gyro: np.ndarray, first: int, stop: int, rate_hz: float) -> tuple[int, int]:
     """A quiet run cut where the hand still creeps (step 4): near each end (:data:`CREEP_S`, at most a quarter of
     the run) the gyro-integrated angle, the rest's own mean rate taken off, must keep to the line it follows over
-    the stretch beside (twice as long) within :data:`CREEP_SIGMAS` times its scatter about that line there
-    (angle random walk and tremor alike); the rest begins after the last sample that strays further, and ends
-    likewise (again, while a whole stretch tested strays)."""
+    the stretch beside (twice as long) within :data:`CREEP_SIGMAS` times its spread: its scatter about that line
+    there (tremor, noise) and the random walk it takes so far from it (the angle random walk); the rest begins
+    after the last sample that strays further, and ends likewise (again, while a whole stretch tested strays)."""
     cut = True
     while cut:  # a creep longer than the stretch tested is cut piece by piece
         n = stop - first
@@ -202,8 +207,16 @@ def _creep_end(rates: np.ndarray, span: int) -> int:
     design = np.column_stack([np.ones(len(track)), k])
     coef = np.linalg.lstsq(design[span:], track[span:], rcond=None)[0]
     residual = track - design @ coef
-    scatter = np.std(residual[span:], axis=0) + 1e-12 * (np.max(np.abs(track), axis=0) + 1e-300)
-    stray = np.flatnonzero(np.any(np.abs(residual[:span]) > CREEP_SIGMAS * scatter, axis=1))
+    # at rest the angle scatters about the line (tremor, noise) and walks off it (the rate's white noise): its
+    # spread is that scatter, and a random walk grown with the distance from the stretch the line was fitted on,
+    # its pace from the angle's increments over blocks of a quarter second (a tremor's swings cancel in them)
+    scatter = np.std(residual[span:], axis=0)
+    block = max(2, min(span // 4, len(track) // 8))
+    increments = np.diff(residual[span::block], axis=0)
+    walk = np.mean(increments**2, axis=0) / block if len(increments) else np.zeros(residual.shape[1])
+    spread = np.sqrt(scatter[None, :] ** 2 + walk[None, :] * (span - k[:span])[:, None])
+    spread += 1e-12 * (np.max(np.abs(track), axis=0) + 1e-300)
+    stray = np.flatnonzero(np.any(np.abs(residual[:span]) > CREEP_SIGMAS * spread, axis=1))
     return int(stray[-1]) + 1 if len(stray) else 0
 
 

@@ -19,7 +19,7 @@ from ...noise.observations import ObservationKind
 from ...noise.plan import NoisePlan
 from ..result import CalibrationError
 from .graph import ResidualGraph
-from .ipopt import check_rank, quick_weights, solve_ipopt
+from .ipopt import RANK_TOLERANCE, check_rank, quick_weights, solve_ipopt
 from .likelihood import estimate_free_terms
 
 #: A step this small (in sigma) is taken as the last: the next is smaller by a factor ~1e-4 x step
@@ -102,13 +102,53 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
                               f"{STALL_ITERATIONS} iterations: a flat valley of a misfit outside the model; the "
                               "generalised least squares takes it from there")
     elif not stats["success"]:
-        # only what was tested: the solver stopped; whether the schedule determines the parameters is judged from
-        # the information matrix at a converged point, never at this one
+        # only what was tested: the solver stopped, and says so.  A rank-deficient problem leaves Ipopt wandering
+        # along what the data do not determine: "not observable" is said only when Gauss-Newton steps in the
+        # directions they do determine settle, from the information matrix at that converged point
+        weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+        settled, converged = settle_in_range(graph, weights, z)
+        if converged:
+            check_rank(np.asarray(graph.jacobian(settled)[1]), graph.variable_names())
         raise CalibrationError(not_converged(stats, max_iterations))
     fit = generalised_least_squares(rec, graph, noise_plan, dataclasses.replace(noise_plan.model), z,
                                     use_rotation_steps, progress)
     fit.ipopt_stats = stats
     return fit
+
+
+#: A point is converged when the Gauss-Newton step in the directions the data determine would lower the weighted
+#: sum of squares by less than this (one unit of chi-square is what noise makes of it).
+CONVERGED_DECREASE = 1.0
+
+
+#: Gauss-Newton steps tried after a stage-1 solver stopped, before it is said not to have converged.
+SETTLE_STEPS = 10
+
+
+def settle_in_range(graph: ResidualGraph, weights, z: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Gauss-Newton steps within the range of the weighted Jacobian (singular values above
+    :data:`ipopt.RANK_TOLERANCE` of the largest; a rank-deficient problem leaves a solver wandering along the
+    others), each halved until the weighted sum of squares does not grow, from where a solver stopped:
+    ``(z, converged)``, converged when no such step would lower the sum by :data:`CONVERGED_DECREASE` or more."""
+    for _ in range(SETTLE_STEPS):
+        r, jac = graph.jacobian(z)
+        rw, jw = weights @ np.asarray(r).ravel(), weights @ np.asarray(jac)
+        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        kept = s > RANK_TOLERANCE * s[0]
+        projected = u[:, kept].T @ rw
+        if float(projected @ projected) < CONVERGED_DECREASE:
+            return z, True
+        step = -vt[kept].T @ (projected / s[kept])
+        cost = float(rw @ rw)
+        for _ in range(30):
+            trial = weights @ np.asarray(graph.residuals(z + step)).ravel()
+            if float(trial @ trial) < cost:
+                break
+            step = step / 2.0
+        else:
+            return z, False
+        z = z + step
+    return z, False
 
 
 def not_converged(stats: dict, max_iterations: int) -> str:

@@ -69,3 +69,25 @@ def peer_recording():
 def peer_truth():
     """Its truth: the 21-parameter part of the generator's errors."""
     return read_table(PEER / "psins-19pos.truth.csv")
+
+
+@pytest.fixture(scope="session")
+def hand_problem():
+    """A short session by hand (problems/hand-mems.toml with 14 rests of 3-6 s, about 2 minutes): a MEMS unit, raw
+    counts with mid-scale offsets, rests at random orientations, free moves, tremor."""
+    problem = load_problem(PROBLEMS / "hand-mems.toml")
+    return dataclasses.replace(problem, name="hand-short",
+                               hand=dataclasses.replace(problem.hand, rests=14, first_rest_s=20.0, rest_s=(3.0, 6.0)))
+
+
+@pytest.fixture(scope="session")
+def hand_sim(hand_problem):
+    """That session simulated, seed 3."""
+    return simulate(hand_problem, seed=3)
+
+
+@pytest.fixture(scope="session")
+def hand_sim_exact(hand_problem):
+    """The same without sensor noise, tremor, settling or clock jitter (what the fits must recover exactly)."""
+    hand = dataclasses.replace(hand_problem.hand, tremor_deg=0.0, tremor_mg=0.0, settle_deg=0.0, clock_jitter=0.0)
+    return simulate(dataclasses.replace(hand_problem, hand=hand), seed=3, noise=False)

@@ -37,6 +37,10 @@ MISALIGNMENT_RESTS = 12
 MISALIGNMENT_CONDITION = 1e-4
 #: The algebraic ellipsoid is taken when its smallest singular value stands this far below the next one.
 ALGEBRAIC_SEPARATION = 0.1
+#: The accelerometers' offsets and scales are determined by the rests when, under a specific-force noise of this
+#: share of gravity per sample (a generous MEMS one), their uncertainty stays under this share (of g; relative).
+REST_NOISE = 1e-3
+DETERMINED = 0.01
 #: Fewest rests of a session by hand: the accelerometers' nine parameters from gravity's magnitude alone need
 #: nine, and IMU-TK (Tedaldi et al. 2014) asks for at least twelve; its protocol has 30-40.
 MIN_HAND_RESTS = 12
@@ -179,6 +183,13 @@ def fit_accelerometers(means: np.ndarray, weights: np.ndarray, g: float, dt: flo
     if not fits:
         raise ValueError("the rests' accelerometer means do not lie on an ellipsoid")
     solution, (scale, bias, force) = min(fits, key=lambda f: f[0].cost)
+    # rests in one cap fit any of a family of ellipsoids: their offsets and scales are not determined
+    try:
+        spread = np.sqrt(np.diag(np.linalg.inv(solution.jac.T @ solution.jac))) * REST_NOISE
+    except np.linalg.LinAlgError:
+        spread = np.full(6, np.inf)
+    if not np.all(spread < DETERMINED):
+        raise ValueError("the rests' accelerometer means do not determine the ellipsoid")
     if len(means) >= MISALIGNMENT_RESTS:
         wide, wide_model = solve(scale, bias, 9)
         singular = np.linalg.svd(wide.jac, compute_uv=False)

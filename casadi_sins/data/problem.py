@@ -138,6 +138,7 @@ class HandPlan:
     tremor_mg: float = 2.0  # rms linear acceleration of the tremor
     tremor_hz: tuple[float, float] = (6.0, 12.0)
     clock_jitter: float = 0.0  # rms of the true sample instants about the nominal ones, in sample intervals
+    cone_deg: float = 180.0  # every rest's gravity within this of the first rest's (less than 180: a poor session)
     layout_seed: int = 0
 
     def durations(self) -> tuple[list[float], list[float]]:

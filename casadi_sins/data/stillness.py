@@ -57,6 +57,7 @@ QUIET_SPREAD = 2.5
 CREEP_S = 1.5
 CREEP_SIGMAS = 5.0
 MIN_CREEP_SAMPLES = 10
+CREEP_PASSES = 8
 #: A rest whose mean gyro rate stands off the median of the rests by more than this many times their spread
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
 RATE_OUTLIER = 10.0
@@ -185,9 +186,9 @@ def _without_creep(gyro: np.ndarray, first: int, stop: int, rate_hz: float) -> t
     the run) the gyro-integrated angle, the rest's own mean rate taken off, must keep to the line it follows over
     the stretch beside (twice as long) within :data:`CREEP_SIGMAS` times its spread: its scatter about that line
     there (tremor, noise) and the random walk it takes so far from it (the angle random walk); the rest begins
-    after the last sample that strays further, and ends likewise (again, while a whole stretch tested strays)."""
-    cut = True
-    while cut:  # a creep longer than the stretch tested is cut piece by piece
+    after the last sample that strays further, and ends likewise (again after each cut, :data:`CREEP_PASSES`
+    times at most)."""
+    for _ in range(CREEP_PASSES):  # again after a cut: the stretch beside may have held the creep's tail
         n = stop - first
         span = min(int(round(CREEP_S * rate_hz)), n // 4)
         if span < MIN_CREEP_SAMPLES:
@@ -195,7 +196,8 @@ def _without_creep(gyro: np.ndarray, first: int, stop: int, rate_hz: float) -> t
         part = gyro[first:stop] - np.median(gyro[first:stop], axis=0)
         head, tail = _creep_end(part[:3 * span], span), _creep_end(part[::-1][:3 * span], span)
         first, stop = first + head, max(first + head, stop - tail)
-        cut = head == span or tail == span
+        if not head and not tail:
+            break
     return first, stop
 
 

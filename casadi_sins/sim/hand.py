@@ -57,6 +57,18 @@ def random_attitude(rng: np.random.Generator) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
+def attitude_in_cone(rng: np.random.Generator, first: np.ndarray, cone_deg: float) -> np.ndarray:
+    """A random attitude whose gravity direction (body) lies within ``cone_deg`` of that of ``first``: a random
+    heading, then a tilt about a random horizontal axis of up to the cone's angle (uniform on the cap)."""
+    if cone_deg >= 180.0:
+        return random_attitude(rng)
+    tilt = np.arccos(1.0 - rng.uniform() * (1.0 - np.cos(np.radians(cone_deg))))
+    azimuth = rng.uniform(0.0, 2.0 * np.pi)
+    heading = rotation_matrices(np.array([0.0, 0.0, rng.uniform(0.0, 2.0 * np.pi)]))
+    level = rotation_matrices(tilt * np.array([np.cos(azimuth), np.sin(azimuth), 0.0]))
+    return level @ heading @ first
+
+
 @dataclasses.dataclass
 class Piece:
     """A rest or a move over ``[t0, t1]``: attitude ``A exp([r(t) x])``, position ``p(t)``."""
@@ -175,7 +187,7 @@ def plan_hand(problem: Problem, rng: np.random.Generator) -> HandMotion:
     attitudes = [random_attitude(rng)]
     positions = [np.zeros(3)]
     for _ in moves:
-        attitudes.append(random_attitude(rng))
+        attitudes.append(attitude_in_cone(rng, attitudes[0], hand.cone_deg))
         step = rng.standard_normal(3)
         step *= rng.uniform(*hand.translation_m) / np.linalg.norm(step)
         positions.append(positions[-1] + step - 0.5 * positions[-1])

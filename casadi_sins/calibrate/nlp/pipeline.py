@@ -79,6 +79,7 @@ class _Run:
     evidence: dict | None = None
     evidence_named: bool = False
     start: str = "ipopt"  # or "gauss-newton": stage 1 from a start fitted to the data (.start)
+    navigation_grade: bool = True  # the gyros resolve the Earth rate (initial.resolves_earth_rate)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -182,7 +183,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     t_start = time.perf_counter()
     observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
-    mems_by_hand = any(s.is_free for s in rec.segments) and not resolves_earth_rate(rec, initial.values)
+    navigation_grade = resolves_earth_rate(rec, initial.values)
+    mems_by_hand = any(s.is_free for s in rec.segments) and not navigation_grade
     model = model if model is not None else (HAND_MEMS_MODEL if mems_by_hand else "21")
     groups = model_groups(model)
     noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
@@ -191,7 +193,7 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     if static_step_s is None:
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
-               list(rec.warnings), t_start, noise_s)
+               list(rec.warnings), t_start, noise_s, navigation_grade=navigation_grade)
     if mems_by_hand:
         run.start = "gauss-newton"  # near the answer, and Ipopt's quick weights miss a MEMS unit's tilt walk (.start)
     if swaying:
@@ -371,8 +373,9 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     params = ParameterSet(values, covariance=covariance, names=names)
     remedy = ("their sigma carries the misfit of the terms outside the model named above (--model auto), not "
               "the schedule") if run.evidence_named else SCHEDULE_REMEDY
-    separation_checks, separation_text = separation_warnings(params, run.wander, remedy,
-                                                             grade_levels(names, model, rec))
+    # a navigation-grade unit is judged by the navigation-grade levels; any other by what its own noise could give
+    levels = None if run.navigation_grade else grade_levels(names, model, rec)
+    separation_checks, separation_text = separation_warnings(params, run.wander, remedy, levels)
     assessment.checks += separation_checks
     assessment.warnings += separation_text
     warnings = run.warnings + run.noise_plan.warnings + assessment.warnings  # shown once, with the result

@@ -50,8 +50,11 @@ MIN_SPREAD_DEG = 30.0
 #: A move that turns more than this in one sample (deg) is too fast for the sample rate: the sample-by-sample
 #: navigation of the calibration (its coning terms) is no longer a small-angle step.
 MAX_STEP_DEG = 15.0
-#: Samples whose pulses are summed in the search for the gyros' common pulse size (then half as many).
+#: Samples whose pulses are summed in the search for the gyros' common pulse size (then half as many), and in the
+#: Gauss-Newton fit of ``M``, which stops when its steps are below this share of the size.
 SEARCH_BLOCK = 4
+FIT_BLOCK = 2
+FIT_TOLERANCE = 1e-5
 #: Resting gyro rates this many times the Earth rate are a bias (a MEMS unit): the rough bias is the rests' mean.
 BIAS_EARTH_RATIO = 10.0
 
@@ -282,8 +285,9 @@ def fit_gyros(gyro: np.ndarray, rests, up: np.ndarray, iterations: int = 8) -> G
         sizes = np.geomspace(best / 1.1, best * 1.1, count)
     matrix = best * np.eye(3)
     prior = 0.3 * best  # a weak prior on M about the common size: a direction no move shows stays near it
+    paired = _summed(pulses, FIT_BLOCK)  # a rough model: pairs of samples (their coning is far below the moves' misses)
     for _ in range(iterations):
-        turn, q = _carry(pulses, matrix[None], sensitivity=True)
+        turn, q = _carry(paired, matrix[None], sensitivity=True)
         turn = turn[0]
         v = np.einsum("mji,mj->mi", turn, up[:-1])  # R^T u
         miss = v - up[1:]
@@ -295,13 +299,13 @@ def fit_gyros(gyro: np.ndarray, rests, up: np.ndarray, iterations: int = 8) -> G
         rhs = np.concatenate([rhs, -(matrix - best * np.eye(3)).ravel() * (1.0 / prior) * 1e-3])
         step = np.linalg.lstsq(a, rhs, rcond=None)[0].reshape(3, 3)
         trial = matrix + step
-        new = np.sum(_misses(_carry(pulses, trial[None])[0], up) ** 2)
+        new = np.sum(_misses(_carry(paired, trial[None])[0], up) ** 2)
         while new > np.sum(miss**2) and np.max(np.abs(step)) > 1e-9 * best:
             step /= 2.0
             trial = matrix + step
-            new = np.sum(_misses(_carry(pulses, trial[None])[0], up) ** 2)
+            new = np.sum(_misses(_carry(paired, trial[None])[0], up) ** 2)
         matrix = trial
-        if np.max(np.abs(step)) < 1e-7 * best:
+        if np.max(np.abs(step)) < FIT_TOLERANCE * best:
             break
     turn = _carry(pulses, matrix[None])[0][0]
     carried = np.einsum("mji,mj->mi", turn, up[:-1])

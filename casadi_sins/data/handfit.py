@@ -14,8 +14,8 @@ Nothing is assumed of the pulses (raw counts with an ADC's mid-scale offset, any
   entries of ``M`` (the attitude's sensitivity to ``M`` carried along the move), give the gyro scale
   factors and misalignments.  What a move cannot show (its turn about gravity) is left to the calibration.
 
-:func:`hand_checks` turns what the fits found into the one-line refusals of a session that cannot be
-calibrated: too few rests, rests that span too few directions, moves too fast for the sample rate.
+:func:`data.handling.fit_session` turns what the fits find into the one-line refusals of a session that
+cannot be calibrated: too few rests, rests that span too few directions, moves too fast for the sample rate.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ with each group's start attitude free.  So a session by hand is described by its
    more than :data:`MAX_MISS_DEG` (a jolt, a sensor range exceeded, a rest that was none) ends the group
    there, as handling between groups;
 4. a session that cannot be calibrated is refused in one line that says what to add
-   (:func:`hand_session_problems`): too few rests, rests that span too few directions, moves too fast for
+   (:func:`fit_session`, :func:`too_fast`): too few rests, rests that span too few directions, moves too fast for
    the sample rate.
 """
 

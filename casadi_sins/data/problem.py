@@ -12,7 +12,7 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
                 optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration),
                 rotations_s = [...] (each rotation's duration; default [timing] rotation_s)
     [hand]      instead of [[groups]] and [timing]: a unit moved by hand through rests at random
-                orientations (:class:`HandPlan`; IMU-TK's protocol; motion in :mod:`sim.hand`)
+                orientations (:class:`data.handplan.HandPlan`; IMU-TK's protocol; motion in :mod:`sim.hand`)
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
                 accel_noise_ug, gyro_noise_deg_h, quantize
     [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}; the 21, and any
@@ -29,8 +29,6 @@ import math
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
-
 from ..core import orientation as orient
 from ..core.earth import Site
 from ..core.errors import InputError, shown
@@ -39,6 +37,7 @@ from ..core.toml import read_toml
 from ..core.units import TO_SI
 from ..model.parameters import ParameterSet
 from ..model.registry import is_known, unit_of
+from .handplan import HandPlan, read_hand_plan
 from .recording import Segment
 
 FORMAT = "casadi-sins-problem/1"
@@ -118,38 +117,6 @@ class Deviations:
 
 
 @dataclasses.dataclass(frozen=True)
-class HandPlan:
-    """A session by hand (``[hand]``): rests at random orientations joined by free moves.
-
-    Durations and ranges are drawn uniformly; the schedule (how long each rest and move lasts) from
-    ``layout_seed``, so that it is the same for every simulation seed; the orientations, the moves' paths,
-    the translations and the tremor from the simulation's seed (:mod:`sim.hand`).
-    """
-
-    rests: int = 36  # rests, the first included
-    first_rest_s: float = 40.0
-    rest_s: tuple[float, float] = (4.0, 10.0)
-    move_s: tuple[float, float] = (3.0, 8.0)
-    peak_rate_deg_s: tuple[float, float] = (60.0, 250.0)  # each move's peak rate (its path wobbles to reach it)
-    translation_m: tuple[float, float] = (0.05, 0.3)  # how far each move carries the unit
-    settle_deg: float = 1.0  # the last part of each move, crept into the rest (rate fading over a fraction of a second)
-    settle_s: float = 0.25
-    tremor_deg: float = 0.02  # rms angle of the hand's tremor in the rests
-    tremor_mg: float = 2.0  # rms linear acceleration of the tremor
-    tremor_hz: tuple[float, float] = (6.0, 12.0)
-    clock_jitter: float = 0.0  # rms of the true sample instants about the nominal ones, in sample intervals
-    cone_deg: float = 180.0  # every rest's gravity within this of the first rest's (less than 180: a poor session)
-    layout_seed: int = 0
-
-    def durations(self) -> tuple[list[float], list[float]]:
-        """``(rests, moves)``: each rest's and move's duration (s), from ``layout_seed``."""
-        rng = np.random.default_rng(self.layout_seed)
-        rests = [self.first_rest_s] + list(rng.uniform(*self.rest_s, size=self.rests - 1))
-        moves = list(rng.uniform(*self.move_s, size=self.rests - 1))
-        return [float(r) for r in rests], [float(m) for m in moves]
-
-
-@dataclasses.dataclass(frozen=True)
 class Problem:
     """An experiment to simulate: site, rate, schedule, timing, deviations and truth (``hand``: a session by
     hand, whose ``groups`` are empty)."""
@@ -173,7 +140,7 @@ class Problem:
         """The nominal schedule as recording segments (a session by hand: rests at any orientation and free
         moves, one group)."""
         if self.hand is not None:
-            return _hand_segments(self.hand)
+            return self.hand.segments()
         segs: list[Segment] = []
         t = 0.0
         for gi, plan in enumerate(self.groups, start=1):
@@ -198,18 +165,6 @@ class Problem:
     def duration(self) -> float:
         """End of the schedule, s."""
         return self.segments()[-1].end
-
-
-def _hand_segments(hand: HandPlan) -> list[Segment]:
-    rests, moves = hand.durations()
-    segs, t = [], 0.0
-    for k, rest in enumerate(rests):
-        if k:
-            segs.append(Segment(len(segs) + 1, 1, "rotation", round(t, 9), round(t + moves[k - 1], 9)))
-            t += moves[k - 1]
-        segs.append(Segment(len(segs) + 1, 1, "static", round(t, 9), round(t + rest, 9)))
-        t += rest
-    return segs
 
 
 def default_problem_path() -> Path:
@@ -269,39 +224,7 @@ class _Reader:
         return timing
 
     def hand(self) -> HandPlan | None:
-        doc = self.doc.get("hand")
-        if doc is None:
-            return None
-        if not isinstance(doc, dict):
-            raise self.fail("[hand] must be a table")
-        fields = {f.name: f.default for f in dataclasses.fields(HandPlan)}
-        unknown = set(doc) - set(fields)
-        if unknown:
-            raise self.fail(f"[hand] unknown key(s) {', '.join(sorted(unknown))}")
-        values = {}
-        for key, value in doc.items():
-            if isinstance(fields[key], tuple):
-                pair = value if isinstance(value, list) else [value, value]
-                if len(pair) != 2:
-                    raise self.fail(f"[hand] {key} must be a number or [low, high]")
-                low, high = (self.number({"v": v}, "v", f"hand {key}") for v in pair)
-                if not 0.0 <= low <= high:
-                    raise self.fail(f"[hand] {key} must be 0 <= low <= high")
-                values[key] = (low, high)
-            elif key in ("rests", "layout_seed"):
-                count = self.number(doc, key, "hand")
-                if count != int(count) or count < (2 if key == "rests" else 0):
-                    raise self.fail(f"[hand] {key} must be an integer" + (" of at least 2" if key == "rests" else ""))
-                values[key] = int(count)
-            else:
-                number = self.number(doc, key, "hand")
-                if number < 0.0:
-                    raise self.fail(f"[hand] {key} must not be negative")
-                values[key] = number
-        plan = HandPlan(**values)
-        if min(plan.first_rest_s, plan.rest_s[0], plan.move_s[0]) <= 0.0 or plan.peak_rate_deg_s[1] <= 0.0:
-            raise self.fail("[hand] rests, moves and peak rates must be positive")
-        return plan
+        return read_hand_plan(self.doc.get("hand"), self.path)
 
     def groups(self) -> tuple[GroupPlan, ...]:
         if "hand" in self.doc:

@@ -24,8 +24,8 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
    about the vertical): its mean gyro rate then stands off the others.  Rests whose mean rate differs from
    the median of all rests by more than :data:`RATE_OUTLIER` times the rests' spread are taken for motion.
 
-:func:`find_rests` returns the rests as sample ranges; :func:`motion_mask` the per-sample motion flags of a
-recording whose rests are known (the checks of a given description, :mod:`data.refine`).
+:func:`find_rests` returns the rests as sample ranges; :func:`rest_baseline` the resting level of each sample
+of a recording whose rests are known (the checks of a given description, :mod:`data.refine`, take it off).
 """
 
 from __future__ import annotations

@@ -25,21 +25,23 @@ def test_free_segments_are_written_without_letters_or_angles_and_read_back(writt
     assert back.segments[1].what == "free move"
 
 
-def test_free_may_be_spelled_and_letters_mix_with_free_rests(written, tmp_path):
+def with_first(written, tmp_path, line: str, added: str):
+    """The written description with ``added`` after the first ``line``, beside the same samples."""
     text = written.read_text()
-    first = text.index('kind = "static"')
-    free = text[:first] + 'kind = "static"\norientation = "free"' + text[first + len('kind = "static"'):]
-    path = tmp_path / "free.toml"
-    path.write_text(free.replace('data = "hand.csv"', f'data = "{written.with_suffix(".csv")}"'))
+    at = text.index(line) + len(line)
+    path = tmp_path / "edited.toml"
+    path.write_text((text[:at] + "\n" + added + text[at:]).replace('data = "hand.csv"',
+                                                                   f'data = "{written.with_suffix(".csv")}"'))
+    return path
+
+
+def test_free_may_be_spelled_and_letters_mix_with_free_rests(written, tmp_path):
+    path = with_first(written, tmp_path, 'kind = "static"', 'orientation = "free"')
     assert read_recording(path).segments[0].orientation is None
 
 
 def test_a_rotation_with_an_axis_but_no_angle_is_refused_in_one_line(written, tmp_path):
-    text = written.read_text()
-    rotation = text.index('kind = "rotation"')
-    broken = text[:rotation] + 'kind = "rotation"\naxis = "+Z"' + text[rotation + len('kind = "rotation"'):]
-    path = tmp_path / "broken.toml"
-    path.write_text(broken.replace('data = "hand.csv"', f'data = "{written.with_suffix(".csv")}"'))
+    path = with_first(written, tmp_path, 'kind = "rotation"', 'axis = "+Z"')
     with pytest.raises(InputError, match=r"segment 2: a rotation gives both 'axis' and 'angle_deg', or neither"):
         read_recording(path)
 

@@ -77,7 +77,7 @@ class Fit:
 
 def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
               tolerance: float, max_iterations: int, progress, presolved: tuple | None = None,
-              x0: np.ndarray | None = None) -> Fit:
+              x0: np.ndarray | None = None, relinearise: float = None) -> Fit:
     """Stage 1 (Ipopt, quick weights; or ``presolved``, ``(z, stats)`` of :func:`.start.presolve`: Gauss-Newton
     under the noise model from a start fitted to the data) and stage 2 (generalised least squares under the noise
     model).
@@ -111,7 +111,7 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
             check_rank(np.asarray(graph.jacobian(settled)[1]), graph.variable_names())
         raise CalibrationError(not_converged(stats, max_iterations))
     fit = generalised_least_squares(rec, graph, noise_plan, dataclasses.replace(noise_plan.model), z,
-                                    use_rotation_steps, progress)
+                                    use_rotation_steps, progress, relinearise=relinearise)
     fit.ipopt_stats = stats
     return fit
 
@@ -188,18 +188,22 @@ def stalled(stats: dict) -> bool:
 
 
 def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, model: SensorNoise,
-                              z: np.ndarray, use_rotation_steps: bool, progress, update_free: bool = True) -> Fit:
+                              z: np.ndarray, use_rotation_steps: bool, progress, update_free: bool = True,
+                              relinearise: float | None = None) -> Fit:
     """Gauss-Newton on the Kalman-whitened residuals from ``z`` until a step is in the linear region.
 
     With ``update_free`` the noise terms the raw data did not determine are set by restricted maximum
-    likelihood at the first linearisation (:func:`likelihood.estimate_free_terms`).
+    likelihood at the first linearisation (:func:`likelihood.estimate_free_terms`).  The noise model is rebuilt
+    along the attitudes after a step of more than ``relinearise`` sigma (default :data:`GLS_RELINEARISE_NOISE`;
+    a unit whose heading is weakly determined, a MEMS unit by hand, would chase its own whitening otherwise).
     """
+    relinearise = GLS_RELINEARISE_NOISE if relinearise is None else relinearise
     gls_steps: list[float] = []
     system = None
     for _ in range(GLS_MAX_STEPS):
         r, jac = (np.asarray(m) for m in graph.jacobian(z))
         r = r.ravel()
-        if system is None or gls_steps[-1] > GLS_RELINEARISE_NOISE:  # the attitudes barely move near the answer
+        if system is None or gls_steps[-1] > relinearise:  # the attitudes barely move near the answer
             system = NoiseSystem(graph.tracks(np.asarray(graph.trajectory(z)), use_rotation_steps,
                                               noise_plan.motions), rec.site.g, rec.site.earth_rate)
         white = system.whiten(np.column_stack([r, jac]), model).columns

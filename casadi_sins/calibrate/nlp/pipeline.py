@@ -44,7 +44,7 @@ from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_s
 from .ipopt import quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import model_groups, model_label, select_groups, unobservable_group
-from .start import presolve, start_vector
+from .start import RELINEARISE_NOISE, presolve, start_vector
 from .wander import estimate_bias_wander
 
 #: The default model of a MEMS unit moved by hand: the 21 and the gyro g-sensitivity (a MEMS gyro's is hundreds of
@@ -80,6 +80,7 @@ class _Run:
     evidence_named: bool = False
     start: str = "ipopt"  # or "gauss-newton": stage 1 from a start fitted to the data (.start)
     navigation_grade: bool = True  # the gyros resolve the Earth rate (initial.resolves_earth_rate)
+    relinearise: float | None = None  # the GLS's noise-model rebuild threshold (sigma), default gls'
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -107,7 +108,7 @@ class _Run:
         if solve["max_iterations"] is None:
             solve["max_iterations"] = max(200, 20 * graph.n_variables)
         return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress,
-                         presolved=presolved, x0=x0, **solve)
+                         presolved=presolved, x0=x0, relinearise=self.relinearise, **solve)
 
 
 def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
@@ -196,6 +197,7 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
                list(rec.warnings), t_start, noise_s, navigation_grade=navigation_grade)
     if mems_by_hand:
         run.start = "gauss-newton"  # near the answer, and Ipopt's quick weights miss a MEMS unit's tilt walk (.start)
+        run.relinearise = RELINEARISE_NOISE  # its heading, weakly determined, would chase its own whitening
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
     return run
@@ -309,7 +311,7 @@ def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
         return fit
     stats = fit.ipopt_stats
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, model, fit.z, fit.use_rotation_steps,
-                                    run.progress, update_free=False)
+                                    run.progress, update_free=False, relinearise=run.relinearise)
     fit.ipopt_stats = stats
     record(run.noise_plan, run.wander)
     message = describe(run.wander)
@@ -333,7 +335,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
             f"unmodelled step {unmodelled.unmodelled_step * 1e3:.3g} mm/s per rotation added")
     stats = fit.ipopt_stats
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, unmodelled, fit.z, fit.use_rotation_steps,
-                                    run.progress, update_free=False)
+                                    run.progress, update_free=False, relinearise=run.relinearise)
     fit.ipopt_stats = stats
     first = [c for c in assessment.checks if not c.passed and c.value > c.limit]  # beyond (not below) the model
     assessment = assess(graph, fit, run.noise_plan)

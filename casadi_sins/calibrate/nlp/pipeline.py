@@ -47,6 +47,8 @@ from .selection import model_groups, model_label, select_groups, unobservable_gr
 from .start import RELINEARISE_NOISE, presolve, start_vector
 from .wander import estimate_bias_wander
 
+#: The navigation step (s) of a MEMS unit moved by hand, in its moves and its rests (see ``static_step_s``).
+HAND_STEP_S = 0.02
 #: The default model of a MEMS unit moved by hand: the 21 and the gyro g-sensitivity (a MEMS gyro's is hundreds of
 #: deg/h per g; in a rest of seconds it tilts the unit by tenths of a degree).
 HAND_MEMS_MODEL = ("gyro_gsens",)
@@ -112,7 +114,7 @@ class _Run:
 
 
 def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
-                  static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
+                  static_block_s: float | None = None, rotation_step_s: float | None = None,
                   use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int | None = None,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
                   static_step_s: float | None = None, model=None) -> CalibrationResult:
@@ -129,9 +131,10 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
     static_block_s : float, optional
         Seconds between velocity observations in static segments (default
         :func:`steps.default_observation_spacing`).
-    rotation_step_s : float
-        Rotation step (40 ms: a method error below 0.001 natural units on the paper's problem; the number of
-        steps, hence the time, does not grow with the sample rate).
+    rotation_step_s : float, optional
+        Rotation step (default 40 ms: a method error below 0.001 natural units on the paper's problem; the
+        number of steps, hence the time, does not grow with the sample rate; :data:`HAND_STEP_S` for a MEMS
+        unit by hand, below).
     use_rotation_steps : bool or "auto"
         Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
         static residuals (F-test, :data:`diagnostics.STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets
@@ -150,7 +153,10 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
         Datasheet noise terms; those not given are estimated from the data.
     static_step_s : float, optional
         Navigation step in static segments (default: the observation spacing; on a swaying base
-        :data:`steps.SWAY_STATIC_STEP_S`).
+        :data:`steps.SWAY_STATIC_STEP_S`; :data:`HAND_STEP_S` for a MEMS unit by hand: its moves turn at
+        hundreds of deg/s about wandering axes and a hand's tremor turns its rests, so that pulses summed over
+        40 ms of a move or a second of a rest err by tens of ug and deg/h, measured on noise-free simulations;
+        steps of 20 ms with the coning and sculling terms keep it to a few hundredths of that).
     model : {"21", "extended", "auto"}, tuple of group keys, or None
         The parameters: the paper's 21; with every extra group of the registry (quadratic scale, lever arms,
         time offset); or ``"auto"``: the extra groups the data support (each group's Wald statistic in the
@@ -187,6 +193,10 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     navigation_grade = resolves_earth_rate(rec, initial.values)
     mems_by_hand = any(s.is_free for s in rec.segments) and not navigation_grade
     model = model if model is not None else (HAND_MEMS_MODEL if mems_by_hand else "21")
+    if rotation_step_s is None:
+        rotation_step_s = min(HAND_STEP_S, ROTATION_STEP_S) if mems_by_hand else ROTATION_STEP_S
+    if static_step_s is None and mems_by_hand:
+        static_step_s = HAND_STEP_S
     groups = model_groups(model)
     noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
     noise_s = time.perf_counter() - t_start

@@ -17,9 +17,9 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
    the moving deviation.  The gyro-integrated angle shows it: with the rest's own mean rate taken off it follows
    a line (the angle random walk and the tremor about it) over the stretch beside each end; the end is cut
    where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its spread (its scatter about
-   the line there, and the random walk it takes so far off); then placed at the fitted onset of the motion beside it
-   (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle departs from
-   the rest's line, which takes any offset; the slow start of a move shows there first).
+   the line there, and the random walk it takes so far off); then placed at the fitted onset of the motion
+   beside it (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle
+   departs from the rest's line, which takes any offset; the slow start of a move shows there first).
 5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
    about the vertical): its mean gyro rate then stands off the others.  Rests whose mean rate differs from
    the median of all rests by more than :data:`RATE_OUTLIER` times the rests' spread are taken for motion.
@@ -37,12 +37,11 @@ import numpy as np
 
 from .edges import angle_track, motion_end, motion_start
 
-#: Seconds of the moving window of the activity and of the moving mean of the slow ends.
+#: Seconds of the moving window of the activity.
 WINDOW_S = 0.2
 #: Fewest samples in that window (a low sample rate).
 MIN_WINDOW = 5
-#: Percentile of the moving deviation taken as a channel's quiet level, and the ratio of that percentile of a
-#: sample deviation to its median under white noise (21 samples: 0.83), so that the level is the typical one.
+#: Percentile of the moving deviation taken as a channel's quiet level (the rests hold more of the samples).
 QUIET_PERCENTILE = 10.0
 #: A channel's quiet level is at least this share of the 99th percentile of its moving deviation (the moves').
 MOTION_CONTRAST = 1e-3

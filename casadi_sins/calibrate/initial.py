@@ -35,7 +35,7 @@ from ..core.earth import EARTH_RATE
 from ..core.errors import InputError
 from ..core.orientation import parse_axis
 from ..data.handfit import BIAS_EARTH_RATIO, rough_values
-from ..data.handling import fit_session, rest_means, too_fast
+from ..data.handling import MAX_MISS_DEG, fit_session, rest_means, too_fast
 from ..data.recording import Recording
 from ..data.segmentation import BIAS_RATIO_LIMIT, bias_ratio
 from ..model.parameters import ParameterSet
@@ -170,7 +170,9 @@ def _offset(means: np.ndarray, rec: Recording) -> bool:
 
 
 def fitted_parameters(rec: Recording) -> ParameterSet:
-    """Rough values fitted to the recording's own rests and moves (:mod:`data.handfit`).
+    """Rough values fitted to the recording's own rests and moves (:mod:`data.handfit`); a move whose gravity the
+    gyros miss by more than :data:`data.handling.MAX_MISS_DEG` (the chain by measured gravity) is a doubt added to
+    ``rec.warnings``.
 
     Raises
     ------
@@ -187,6 +189,14 @@ def fitted_parameters(rec: Recording) -> ParameterSet:
     reason = too_fast(gyro_fit, moves, rec.rate_hz)
     if reason:
         raise InputError(rec.label, reason)
+    missed = [f"{a:.2f}-{b:.2f} s ({m:.3g} deg)" for (a, b), m in zip(moves, gyro_fit.miss_deg) if m > MAX_MISS_DEG]
+    if missed:  # the chain by measured gravity: a move the gyros do not carry into the next rest (a doubt, reported)
+        doubt = (f"{rec.label}: the gyros carry gravity off the next rest's measured direction in the move(s) at "
+                 f"{', '.join(missed[:4])}{', ...' if len(missed) > 4 else ''} (a jolt, the sensor's range exceeded, a "
+                 "rest that was none?): check the segments there (casadi-sins segment starts a new group at such a "
+                 "move)")
+        if doubt not in rec.warnings:
+            rec.warnings.append(doubt)
     rest_gyro, weights = rest_means(rec.gyro, spans)
     rest_force = accel_fit.force(rest_means(rec.accel, spans)[0], rec.dt)
     return ParameterSet.from_dict(rough_values(accel_fit, gyro_fit, rec.dt, rest_gyro, rest_force, weights))

@@ -50,6 +50,10 @@ MIN_SPREAD_DEG = 30.0
 #: A move that turns more than this in one sample (deg) is too fast for the sample rate: the sample-by-sample
 #: navigation of the calibration (its coning terms) is no longer a small-angle step.
 MAX_STEP_DEG = 15.0
+#: A move whose gravity the first fit misses by more than this many times the median miss (and this many degrees)
+#: is left out of the second.
+OUTLIER_MISS = 5.0
+OUTLIER_MISS_DEG = 3.0
 #: Samples whose pulses are summed in the search for the gyros' common pulse size (then half as many), and in the
 #: Gauss-Newton fit of ``M``, which stops when its steps are below this share of the size.
 SEARCH_BLOCK = 4
@@ -253,6 +257,43 @@ def _misses(turn: np.ndarray, up: np.ndarray) -> np.ndarray:
     return np.einsum("cmji,mj->cmi", turn, up[:-1]) - up[1:]
 
 
+def _miss_deg(pulses: np.ndarray, matrix: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Per move, the angle (deg) between the gravity direction the gyros carry into the next rest and the measured."""
+    carried = np.einsum("mji,mj->mi", _carry(pulses, matrix[None])[0][0], up[:-1])
+    return np.degrees(np.arccos(np.clip(np.sum(carried * up[1:], axis=1), -1.0, 1.0)))
+
+
+def _gauss_newton(paired: np.ndarray, up: np.ndarray, best: float, kept: np.ndarray, iterations: int,
+                  start: np.ndarray | None = None) -> np.ndarray:
+    """Gauss-Newton over the nine entries of ``M`` on the ``kept`` moves (pulses summed in pairs), from ``best``
+    times the identity (or ``start``): the attitude's sensitivity to ``M`` carried along each move."""
+    matrix = best * np.eye(3) if start is None else start
+    prior = 0.3 * best  # a weak prior on M about the common size: a direction no move shows stays near it
+    paired, up_before, up_after = paired[kept], up[:-1][kept], up[1:][kept]
+    for _ in range(iterations):
+        turn, q = _carry(paired, matrix[None], sensitivity=True)
+        turn = turn[0]
+        v = np.einsum("mji,mj->mi", turn, up_before)  # R^T u
+        miss = v - up_after
+        phi = np.einsum("mji,mjab->miab", turn, q).reshape(len(v), 3, 9)  # R^T Q
+        jac = np.cross(v[:, :, None], phi, axis=1)  # d(miss)/d(M entries): [v x] phi
+        a = jac.reshape(-1, 9)
+        rhs = -miss.ravel()
+        a = np.vstack([a, np.eye(9) * (1.0 / prior) * 1e-3])
+        rhs = np.concatenate([rhs, -(matrix - best * np.eye(3)).ravel() * (1.0 / prior) * 1e-3])
+        step = np.linalg.lstsq(a, rhs, rcond=None)[0].reshape(3, 3)
+        trial = matrix + step
+        new = np.sum((np.einsum("mji,mj->mi", _carry(paired, trial[None])[0][0], up_before) - up_after) ** 2)
+        while new > np.sum(miss**2) and np.max(np.abs(step)) > 1e-9 * best:
+            step /= 2.0
+            trial = matrix + step
+            new = np.sum((np.einsum("mji,mj->mi", _carry(paired, trial[None])[0][0], up_before) - up_after) ** 2)
+        matrix = trial
+        if np.max(np.abs(step)) < FIT_TOLERANCE * best:
+            break
+    return matrix
+
+
 def fit_gyros(gyro: np.ndarray, rests, up: np.ndarray, iterations: int = 8) -> GyroFit:
     """The gyros' ``M`` from the moves between consecutive ``rests`` (module docstring).
 
@@ -283,33 +324,18 @@ def fit_gyros(gyro: np.ndarray, rests, up: np.ndarray, iterations: int = 8) -> G
         cost = np.sum(_misses(turn, up) ** 2, axis=(1, 2))
         best = float(sizes[int(np.argmin(cost))])
         sizes = np.geomspace(best / 1.1, best * 1.1, count)
-    matrix = best * np.eye(3)
-    prior = 0.3 * best  # a weak prior on M about the common size: a direction no move shows stays near it
     paired = _summed(pulses, FIT_BLOCK)  # a rough model: pairs of samples (their coning is far below the moves' misses)
-    for _ in range(iterations):
-        turn, q = _carry(paired, matrix[None], sensitivity=True)
-        turn = turn[0]
-        v = np.einsum("mji,mj->mi", turn, up[:-1])  # R^T u
-        miss = v - up[1:]
-        phi = np.einsum("mji,mjab->miab", turn, q).reshape(len(v), 3, 9)  # R^T Q
-        jac = np.cross(v[:, :, None], phi, axis=1)  # d(miss)/d(M entries): [v x] phi
-        a = jac.reshape(-1, 9)
-        rhs = -miss.ravel()
-        a = np.vstack([a, np.eye(9) * (1.0 / prior) * 1e-3])
-        rhs = np.concatenate([rhs, -(matrix - best * np.eye(3)).ravel() * (1.0 / prior) * 1e-3])
-        step = np.linalg.lstsq(a, rhs, rcond=None)[0].reshape(3, 3)
-        trial = matrix + step
-        new = np.sum(_misses(_carry(paired, trial[None])[0], up) ** 2)
-        while new > np.sum(miss**2) and np.max(np.abs(step)) > 1e-9 * best:
-            step /= 2.0
-            trial = matrix + step
-            new = np.sum(_misses(_carry(paired, trial[None])[0], up) ** 2)
-        matrix = trial
-        if np.max(np.abs(step)) < FIT_TOLERANCE * best:
+    # a move the gyros cannot carry (a jolt, a range exceeded) is left out: judged at the common size, then again
+    matrix = best * np.eye(3)
+    kept = np.ones(len(paired), bool)
+    for attempt in range(2):
+        miss = _miss_deg(paired, matrix, up)
+        outliers = miss > max(OUTLIER_MISS * float(np.median(miss)), OUTLIER_MISS_DEG)
+        if (~outliers).sum() < 3 or (attempt and np.array_equal(~outliers, kept)):
             break
-    turn = _carry(pulses, matrix[None])[0][0]
-    carried = np.einsum("mji,mj->mi", turn, up[:-1])
-    miss_deg = np.degrees(np.arccos(np.clip(np.sum(carried * up[1:], axis=1), -1.0, 1.0)))
+        kept = ~outliers
+        matrix = _gauss_newton(paired, up, best, kept, iterations, matrix)
+    miss_deg = _miss_deg(pulses, matrix, up)
     step_deg = np.degrees(np.max(np.linalg.norm(np.einsum("ab,mlb->mla", matrix, pulses), axis=2), axis=1))
     weights = np.array([b - a for a, b in rests], dtype=float)
     return GyroFit(matrix, weights @ bias / weights.sum(), miss_deg, step_deg)

@@ -92,3 +92,18 @@ def test_the_gyro_fit_needs_motion(hand_sim_exact):
     rec = hand_sim_exact.recording
     with pytest.raises(ValueError, match="no motion"):
         fit_gyros(np.zeros_like(rec.gyro), true_spans(rec), np.tile([0.0, 0.0, 1.0], (len(true_spans(rec)), 1)))
+
+
+def test_a_move_the_gyros_cannot_carry_is_left_out_and_named(hand_sim):
+    """Half a move's gyro pulses lost (a range exceeded): the fit leaves that move out, the others keep the scale
+    factors, and the calibration's start names it as a doubt about the segments."""
+    from casadi_sins.calibrate.initial import fitted_parameters
+
+    rec = hand_sim.recording
+    move = rec.segment_samples(rec.segments[5])
+    gyro = rec.gyro.copy()
+    gyro[move.start:(move.start + move.stop) // 2] = np.median(gyro[rec.segment_samples(rec.segments[4])], axis=0)
+    broken = dataclasses.replace(rec, gyro=gyro, warnings=[])
+    rough = fitted_parameters(broken)
+    assert np.all(np.abs(rough.values[12:15] / hand_sim.truth.core[12:15] - 1.0) < 0.01)  # a start: 1 %
+    assert len(broken.warnings) == 1 and f"{rec.segments[5].start:.2f}" in broken.warnings[0]

@@ -106,4 +106,4 @@ def test_a_move_the_gyros_cannot_carry_is_left_out_and_named(hand_sim):
     broken = dataclasses.replace(rec, gyro=gyro, warnings=[])
     rough = fitted_parameters(broken)
     assert np.all(np.abs(rough.values[12:15] / hand_sim.truth.core[12:15] - 1.0) < 0.01)  # a start: 1 %
-    assert len(broken.warnings) == 1 and f"{rec.segments[5].start:.2f}" in broken.warnings[0]
+    assert len(broken.warnings) == 1 and f"at {rec.segments[5].start:.1f}" in broken.warnings[0]

@@ -24,6 +24,7 @@ python benchmarks/bench_montecarlo.py --runs 100 | tee "$out/montecarlo-throughp
 python benchmarks/bench_modulation.py --out "$out/modulation"                # rotation modulation (issue 19), ~4 min
 python benchmarks/bench_modulation_design.py --out "$out/modulation"         # start phase, the factor 2, design-scheme (issue 27), ~2 min
 python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 # segment edges next to slow handling
+python benchmarks/bench_hand.py --runs 3 --out "$out"                          # sessions by hand, IMU-TK's session (issue 37), ~10 min
 python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchmark.txt"   # issue 16's worlds, no datasheet
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
 python benchmarks/bench_mutations.py --seeds 250 --toml-seeds 30 --hostile-seeds 160 --out "$out"  # hostile input (issues 17, 24): 5,031 cases, ~20 min

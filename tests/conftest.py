@@ -103,3 +103,23 @@ def _static_increments(rate_hz, seconds, white, quantization=0.0, sigma=0.0, tau
 def static_increments():
     """The independent generator of a recording at rest (:func:`_static_increments`)."""
     return _static_increments
+@pytest.fixture(scope="session")
+def hand_problem():
+    """A short session by hand (problems/hand-mems.toml with 14 rests of 3-6 s, about 2 minutes): a MEMS unit, raw
+    counts with mid-scale offsets, rests at random orientations, free moves, tremor."""
+    problem = load_problem(PROBLEMS / "hand-mems.toml")
+    return dataclasses.replace(problem, name="hand-short",
+                               hand=dataclasses.replace(problem.hand, rests=14, first_rest_s=20.0, rest_s=(3.0, 6.0)))
+
+
+@pytest.fixture(scope="session")
+def hand_sim(hand_problem):
+    """That session simulated, seed 3."""
+    return simulate(hand_problem, seed=3)
+
+
+@pytest.fixture(scope="session")
+def hand_sim_exact(hand_problem):
+    """The same without sensor noise, tremor, settling or clock jitter (what the fits must recover exactly)."""
+    hand = dataclasses.replace(hand_problem.hand, tremor_deg=0.0, tremor_mg=0.0, settle_deg=0.0, clock_jitter=0.0)
+    return simulate(dataclasses.replace(hand_problem, hand=hand), seed=3, noise=False)

@@ -21,7 +21,7 @@ from ..core.version import software_versions
 from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
-from ..data.description import MAX_NAME, description_toml, read_recording
+from ..data.description import MAX_NAME, description_toml, read_description, read_recording
 from ..data.problem import load_problem
 from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
@@ -72,6 +72,8 @@ def cmd_simulate(args) -> int:
 def cmd_validate(args) -> int:
     """``validate``: read and check a recording, print its schedule."""
     rec = read_recording(args.recording)
+    for note in rec.notes:
+        print(f"note: {note}")
     print(recording_summary(rec))
     print("valid sins-recording/1")
     return 0
@@ -107,18 +109,27 @@ def cmd_navigate(args) -> int:
 def cmd_segment(args) -> int:
     """``segment``: find the schedule of a CSV and write its description."""
     data = Path(args.data)
-    if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
-        raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+    site, rate, head = None, args.rate, None
+    if data.suffix.lower() == ".toml":  # a description without segments: its site, rate, conditions and samples
+        head = read_description(data)
+        site, rate, data = head["site"], args.rate or head["rate_hz"], data.parent / head["data"]
+    if args.latitude is not None or site is None:
+        if args.latitude is None or rate is None:
+            raise CliError("the samples of a CSV need --rate and --latitude (a description gives them)")
+        if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
+            raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+        site = Site(np.radians(args.latitude), args.height, args.gravity)
     name = args.name or Path(args.out).stem
     if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
         raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
                        f"{one_line(repr(name), 80)}")
-    time_, pulses = read_samples(data, args.rate)
-    site = Site(np.radians(args.latitude), args.height, args.gravity)
+    time_, pulses = read_samples(data, rate)
     try:
-        rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], args.rate, site, name, args.min_static_s)
+        rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], rate, site, name, args.min_static_s)
     except ValueError as exc:
         raise CliError(f"{data}: {exc}") from None
+    if head is not None:
+        rec.conditions = head["conditions"]
     out = Path(args.out)
     atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
     for text in notes:
@@ -148,7 +159,10 @@ def cmd_calibrate(args) -> int:
     if args.report:  # before any computation (--out is checked in main)
         check_writable(args.report, directory=True)
     sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
-    rec = refine(read_recording(args.recording), args.min_rest_s)  # approximate segment times: trimmed, or rejected
+    rec = read_recording(args.recording)
+    for note in rec.notes if not getattr(args, "quiet", False) else ():  # a schedule found from the samples (no [[segments]])
+        print(f"note: {note}", file=sys.stderr)
+    rec = refine(rec, args.min_rest_s)  # approximate segment times: trimmed, or rejected
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None
     noise = read_datasheet(args.noise) if args.noise else None

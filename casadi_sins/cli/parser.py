@@ -73,10 +73,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
                    "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
     p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
-    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
-                   help="parameters: the paper's 21 (default); extended: also every extra group (accelerometer "
+    p.add_argument("--model", default=None, choices=["21", "extended", "auto"],
+                   help="parameters: the paper's 21; extended: also every extra group (accelerometer "
                    "quadratic and cross-quadratic terms, lever arms, gyro/accel time offset, gyro g-sensitivity and "
-                   "scale asymmetry); auto: the extra groups the data support (nlp only)")
+                   "scale asymmetry); auto: the extra groups the data support (nlp only). Default: 21, and 21 with the "
+                   "gyro g-sensitivity for a MEMS unit moved by hand (rests at any orientation)")
     p.add_argument("--export", nargs="+", choices=list(EXPORTS),
                    help="also write the table as compensation matrices (NAME.compensation.json / .yaml), a C header "
                    "(NAME.compensation.h) or the PSINS clbt struct (NAME.clbt.m)")
@@ -94,9 +95,11 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("segment", help="find the static and rotation segments of a CSV and write its description")
-    p.add_argument("data", help="the samples, NAME.csv (time, gyro_x..z, accel_x..z)")
-    p.add_argument("--rate", type=float, required=True, help="sample rate, Hz")
-    p.add_argument("--latitude", type=float, required=True, help="latitude of the site, deg")
+    p.add_argument("data", help="the samples, NAME.csv (time, gyro_x..z, accel_x..z), or a description NAME.toml "
+                   "without [[segments]] (its site, rate and samples)")
+    p.add_argument("--rate", type=float, help="sample rate, Hz (needed for a CSV; default: the description's)")
+    p.add_argument("--latitude", type=float, help="latitude of the site, deg (needed for a CSV; with a description "
+                   "it replaces its site)")
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
     p.add_argument("--gravity", type=float, help="local gravity, m/s^2 (default: WGS-84 normal gravity)")
     p.add_argument("--name", help="recording name (default: the output's stem)")

@@ -18,7 +18,8 @@
     temperature_c = 23.5
     date = "2024-05-17"
 
-    [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg)
+    [[segments]]                       # in time order; kind "static" (orientation) or "rotation" (axis, angle_deg);
+                                       # a session by hand leaves them out (a rest at any orientation, a free move)
     group = 1
     kind = "static"
     orientation = "NUE"
@@ -46,6 +47,8 @@ from .samples import read_samples, samples_writer
 
 #: The longest recording name (it becomes file names and report titles).
 MAX_NAME = 200
+#: The orientation of a rest at any orientation, when it is written at all (it may be left out).
+FREE = "free"
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -67,6 +70,15 @@ def read_recording(path: str | Path) -> Recording:
     rate_warning = check_rate(time, head["rate_hz"], data_path)
     if rate_warning:
         rec.warnings.append(rate_warning)
+    if not rec.segments:  # the format allows no [[segments]]: the schedule is found from the samples
+        from .segmentation import segment_recording  # noqa: PLC0415 (the search loads only when it is needed)
+
+        try:
+            found, notes = segment_recording(time, rec.gyro, rec.accel, rec.rate_hz, rec.site, rec.name)
+        except InputError as exc:
+            raise InputError(path, f"no [[segments]], and none found in the samples: {exc.reason}") from None
+        rec.segments = found.segments
+        rec.notes = [f"{path}: no [[segments]]: the schedule was found from the samples"] + notes
     validate_schedule(rec)
     check_physical_range(rec, data_path)
     return rec
@@ -145,8 +157,11 @@ def _parse_site(site, path: Path) -> Site:
 
 
 def _parse_segments(items, path: Path, lines: list[int]) -> list[Segment]:
+    if items is None:
+        return []  # no schedule: it is to be found from the samples (read_recording)
     if not isinstance(items, list) or not items:
-        raise InputError(path, "no [[segments]]")
+        raise InputError(path, "[[segments]] must be an array of tables (or left out: the schedule is then found "
+                               "from the samples)")
     return [_parse_segment(item, number, path, lines[number - 1] if number <= len(lines) else None)
             for number, item in enumerate(items, start=1)]
 
@@ -169,6 +184,8 @@ def _parse_segment(item, number: int, path: Path, line: int | None) -> Segment:
         raise fail(f"end_s {end:g} is not after start_s {start:g}")
     if kind == "static":
         orientation = item.get("orientation")
+        if orientation is None or (isinstance(orientation, str) and orientation.lower() == FREE):
+            return Segment(number, group, kind, start, end)  # a rest at any orientation (a session by hand)
         if not isinstance(orientation, str) or orientation != orientation.upper():
             raise fail(f"orientation {shown(orientation)} must be three capital letters of N S E W U D")
         try:
@@ -178,6 +195,10 @@ def _parse_segment(item, number: int, path: Path, line: int | None) -> Segment:
         return Segment(number, group, kind, start, end, orientation=orientation)
     if kind == "rotation":
         axis = item.get("axis")
+        if axis is None and item.get("angle_deg") is None:
+            return Segment(number, group, kind, start, end)  # a free move: only that the unit moved
+        if axis is None or item.get("angle_deg") is None:
+            raise fail("a rotation gives both 'axis' and 'angle_deg', or neither (a free move by hand)")
         try:
             orient.parse_axis(axis)
         except orient.OrientationError as exc:
@@ -197,7 +218,9 @@ def description(rec: Recording, data_name: str) -> dict:
     segments = []
     for seg in rec.segments:
         item = {"group": seg.group, "kind": seg.kind}
-        if seg.is_static:
+        if seg.is_free:
+            pass  # a rest at any orientation, a free move: the format leaves the keys out
+        elif seg.is_static:
             item["orientation"] = seg.orientation
         else:
             item["axis"] = seg.axis

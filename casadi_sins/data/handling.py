@@ -1,193 +1,137 @@
-"""Segmentation of a session turned by hand: short rests, turns that are no exact multiples of 90 deg,
-moves about several axes at once, gyros that do not resolve the Earth rate.
+"""Segmentation of a session by hand: rests at any orientation joined by free moves (IMU-TK's protocol).
 
-The turntable segmentation (:func:`data.segmentation.detect`) wants rests of 20 s, turns within 8 deg
-of a multiple of 90 deg about one body axis and, for the letters' heading, the Earth rate in the
-gyros.  A session by hand has none of these; the calibration does not need them either: it navigates
-the true motion from the gyros, with each group's start attitude free, so a description needs the
-rests (their letters right within tolerance) and a nominal turn between them.  Here:
+The turntable segmentation (:func:`data.segmentation.detect`) wants rests of 20 s, turns within 8 deg of a
+multiple of 90 deg about one body axis and, for the letters' heading, the Earth rate in the gyros.  A session
+by hand has none of these, and the calibration needs none: it navigates the measured motion from the gyros
+with each group's start attitude free.  So a session by hand is described by its rests alone:
 
-1. rests: quiet stretches (:func:`data.edges.static_stretches`) at least the shortest rest the data
-   support (:func:`data.rests.minimum_rest`'s rule) and a quarter of the longest rest (a pause within
-   a move is not a position); of two rests split by an attitude jump the longer is kept;
-2. the gyro pulse size: one size for the three axes that makes the gyro-integrated moves turn the
-   measured gravity direction of one rest into the next's (a search over sizes; the rests' mean rate
-   is taken off as the bias);
-3. letters: up from gravity (within 30 deg of a body axis); the heading from the Earth rate when the
-   gyros resolve it, else from the first rest by convention and along the chain of turns;
-4. each move between two rests becomes the single-axis turn of a multiple of 90 deg that leads from
-   the letters before to a position whose up axis is the measured one, nearest the measured travel
-   about that axis; a move of less than 45 deg in all, or none that leads there, ends the group
-   (handling between groups).
+1. rests: from the changes of the signals against each rest's own noise, any offset, slow ends of moves
+   excluded (:func:`data.stillness.find_rests`), at least :data:`HAND_REST_S` (a shorter pause is part of a
+   move) and what the edges' fit needs (:data:`data.edges.ONSET_REST_S` each side, a few samples besides);
+2. the rough sensor models from those rests and the moves between them (:mod:`data.handfit`): the
+   accelerometers' ellipsoid gives each rest's gravity direction, the gyros carry it from rest to rest;
+3. every rest becomes a static segment without orientation letters, every move between two a rotation without
+   nominal axis or angle; a move whose gyro-carried gravity direction misses the next rest's measured one by
+   more than :data:`MAX_MISS_DEG` (a jolt, a sensor range exceeded, a rest that was none) ends the group
+   there, as handling between groups;
+4. a session that cannot be calibrated is refused in one line that says what to add
+   (:func:`fit_session`, :func:`too_fast`): too few rests, rests that span too few directions, moves too fast for
+   the sample rate.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..core import orientation as orient
 from ..core.errors import InputError
-from ..core.rotations import rotation_matrices
-from .edges import activity, static_stretches
-from .recording import Segment
-from .rests import LEVEL_RESOLUTION, accel_noise_per_sample
 from .edges import ONSET_REST_S
+from .handfit import (MAX_STEP_DEG, MIN_HAND_RESTS, MIN_SPREAD_DEG, AccelFit, GyroFit, fit_accelerometers,
+                      fit_gyros, spread_deg)
+from .recording import Segment
+from .stillness import Rests, find_rests
 
-#: A rest lasts at least this share of the longest rest: shorter quiet stretches are pauses within a move.
-REST_SHARE = 0.25
-#: Gravity within this of a body axis gives the up letter.
-UP_TOLERANCE_DEG = 30.0
-#: A move that travels less than this in all is no turn.
-MIN_TURN_DEG = 45.0
-
-
-def hand_rests(gyro, accel, rate_hz: float) -> tuple[list[tuple[int, int]], float]:
-    """The rests ``(first, stop)`` and the shortest rest length used (s)."""
-    dt = 1.0 / rate_hz
-    floor = 2.0 * ONSET_REST_S + 3 * dt
-    found, jumps_at, _ = static_stretches(gyro, accel, rate_hz, floor)
-    noise = accel_noise_per_sample(accel, [slice(a, b) for a, b in found])
-    if math.isfinite(noise):
-        floor = max(floor, (noise / LEVEL_RESOLUTION) ** 2 * dt)
-    kept: list[tuple[int, int]] = []
-    for a, b in found:  # of two pieces split by a jump, the longer
-        if kept and kept[-1][1] == a and a in jumps_at:
-            if b - a > kept[-1][1] - kept[-1][0]:
-                kept[-1] = (a, b)
-            continue
-        kept.append((a, b))
-    kept = _quiet_cores(gyro, rate_hz, kept)
-    longest = max((b - a for a, b in kept), default=0) * dt
-    shortest = max(floor, REST_SHARE * longest)
-    return [(a, b) for a, b in kept if (b - a) * dt >= shortest], shortest
+#: A move whose gyro-carried gravity direction misses the next rest's by more than this (deg) is no part of the
+#: chain: its group ends there.  A MEMS gyro's noise and g-sensitivity leave well under a degree in a move.
+MAX_MISS_DEG = 10.0
+#: The shortest rest of a session by hand (s): a pause in a move shorter than this is no rest (IMU-TK takes
+#: static intervals of at least 100 samples, a second at 100 Hz).
+HAND_REST_S = 1.0
 
 
-def _quiet_cores(gyro, rate_hz: float, stretches) -> list[tuple[int, int]]:
-    """Each stretch cut to its longest run without motion by the rate magnitude (the test that
-    :func:`data.segmentation.refine` applies to a description: a quick jerk at a rest's edge is left out)."""
-    act = activity(gyro, rate_hz)
-    moving = act.magnitude > act.edge
-    out = []
-    for a, b in stretches:
-        flags = np.concatenate([[True], moving[a:b], [True]])
-        edges = np.flatnonzero(np.diff(flags.astype(np.int8)))  # starts (-1) and stops (+1) of quiet runs
-        runs = list(zip(edges[0::2], edges[1::2]))
-        if runs:
-            first, stop = max(runs, key=lambda r: r[1] - r[0])
-            out.append((a + int(first), a + int(stop)))
-    return out
+def shortest_hand_rest(rate_hz: float) -> float:
+    """The shortest rest of a session by hand (s): :data:`HAND_REST_S`, and at least the onset fit's rest on each
+    side and a few samples."""
+    return max(HAND_REST_S, 2.0 * ONSET_REST_S + 3.0 / rate_hz)
 
 
-def move_rotations(gyro, rests, biases, sizes) -> np.ndarray:
-    """Body rotation of each move between consecutive rests, for each candidate pulse size: (S, M, 3, 3)."""
-    out = np.tile(np.eye(3), (len(sizes), len(rests) - 1, 1, 1))
-    for m in range(len(rests) - 1):
-        bias = (biases[m] + biases[m + 1]) / 2.0
-        for pulse in gyro[rests[m][1]:rests[m + 1][0]] - bias:
-            out[:, m] = out[:, m] @ rotation_matrices(np.outer(sizes, pulse))
-    return out
+def rest_means(pulses: np.ndarray, spans) -> tuple[np.ndarray, np.ndarray]:
+    """Each rest's mean pulses per sample (K, 3) and its weight, the square root of its samples (K,)."""
+    means = np.array([pulses[a:b].mean(axis=0) for a, b in spans])
+    return means, np.sqrt(np.array([b - a for a, b in spans], dtype=float))
 
 
-def gyro_pulse_size(gyro, rests, biases, ups) -> float:
-    """The one gyro pulse size (rad) that best turns each rest's gravity direction into the next's."""
-    paths = [float(np.sum(np.linalg.norm(gyro[rests[m][1]:rests[m + 1][0]] - biases[m], axis=1)))
-             for m in range(len(rests) - 1)]
-    longest = max(paths)
-    if longest <= 0:
-        raise InputError(None, "the gyros show no motion between the rests")
-    sizes = np.geomspace(math.radians(10.0) / longest, math.radians(3600.0) / longest, 120)
-    for _ in range(2):  # a coarse search, then a fine one about the best
-        turns = move_rotations(gyro, rests, biases, sizes)
-        predicted = np.einsum("smji,mj->smi", turns, ups[:-1])  # R^T u_k
-        cost = np.sum((predicted - ups[1:]) ** 2, axis=(1, 2))
-        best = sizes[int(np.argmin(cost))]
-        sizes = np.geomspace(best / 1.06, best * 1.06, 25)
-    return float(best)
-
-
-def up_letters(up: np.ndarray) -> str | None:
-    """Letters with the measured up axis and a conventional heading (the next axis North); None when gravity is
-    more than :data:`UP_TOLERANCE_DEG` off every body axis."""
-    j = int(np.argmax(np.abs(up)))
-    if abs(up[j]) < math.cos(math.radians(UP_TOLERANCE_DEG)):
-        return None
-    letters = [""] * 3
-    letters[j] = "U" if up[j] > 0 else "D"
-    letters[(j + 1) % 3] = "N"
-    for third in "EW":
-        letters[(j + 2) % 3] = third
-        try:
-            orient.orientation_to_dcm("".join(letters))
-            return "".join(letters)
-        except orient.OrientationError:
-            continue
-    return None
-
-
-def nominal_turn(before: str, up_after: np.ndarray, travel_deg: np.ndarray) -> tuple[str, float, str] | None:
-    """``(axis, angle_deg, letters after)``: the single-axis turn of a multiple of 90 deg from ``before`` to a
-    position whose up axis is the measured one, nearest the measured travel; None when there is none."""
-    target = up_letters(up_after)
-    if target is None or float(np.linalg.norm(travel_deg)) < MIN_TURN_DEG:
-        return None
-    j = next(i for i, c in enumerate(target) if c in "UD")
-    best = None
-    for i in range(3):
-        for sign in (1.0, -1.0):
-            for quarter in (1, 2, 3, 4):
-                axis = f"{'+' if sign > 0 else '-'}{'XYZ'[i]}"
-                after = orient.dcm_to_orientation(
-                    orient.rotate_body(orient.orientation_to_dcm(before), axis, math.radians(90.0 * quarter)), 1.0)
-                if after[j] != target[j]:
-                    continue
-                miss = abs(travel_deg[i] - sign * 90.0 * quarter) + float(np.linalg.norm(np.delete(travel_deg, i)))
-                if best is None or miss < best[0]:
-                    best = (miss, axis, 90.0 * quarter, after)
-    return None if best is None else best[1:]
-
-
-def detect_handled(time, gyro, accel, rate_hz: float) -> tuple[list[Segment], list[str]]:
-    """The segments of a session turned by hand (module docstring), and notes on what was assumed.
+def fit_session(gyro: np.ndarray, accel: np.ndarray, spans, g: float, dt: float) -> tuple[AccelFit, GyroFit]:
+    """The rough accelerometer and gyro models of a session's rests and moves, or the one-line refusal.
 
     Raises
     ------
     InputError
-        When fewer than two rests, or no two rests joined by a turn, are found.
+        Too few rests, rests that span too few directions, moves too fast for the sample rate.
+    """
+    if len(spans) < MIN_HAND_RESTS:
+        raise InputError(None, f"found {len(spans)} rest(s): a session by hand needs at least {MIN_HAND_RESTS} "
+                               "rests at different orientations to fit the accelerometers (IMU-TK's protocol: "
+                               "30-40 rests of a few seconds, each held still); add rests")
+    means, weights = rest_means(accel, spans)
+    try:
+        accel_fit = fit_accelerometers(means, weights, g, dt)
+    except ValueError:
+        accel_fit = None
+    if accel_fit is None or spread_deg(accel_fit.up) < MIN_SPREAD_DEG or accel_fit.misfit > 0.05 * g:
+        spread = "" if accel_fit is None else f" (all within {spread_deg(accel_fit.up):.3g} deg)"
+        raise InputError(None, f"the {len(spans)} rests' gravity directions span too few directions{spread}: the "
+                               "accelerometers' offsets and scale factors are not determined; add rests with each "
+                               "body axis up and down and in between (directions more than "
+                               f"{MIN_SPREAD_DEG:g} deg apart)")
+    try:
+        gyro_fit = fit_gyros(gyro, spans, accel_fit.up)
+    except ValueError as exc:
+        raise InputError(None, f"{exc}: a session by hand needs moves between its rests") from None
+    return accel_fit, gyro_fit
+
+
+def too_fast(gyro_fit: GyroFit, move_times: list[tuple[float, float]], rate_hz: float) -> str | None:
+    """The refusal of moves that turn more than :data:`MAX_STEP_DEG` in one sample, or None."""
+    fast = np.flatnonzero(gyro_fit.step_deg > MAX_STEP_DEG)
+    if not len(fast):
+        return None
+    worst = int(fast[np.argmax(gyro_fit.step_deg[fast])])
+    step = float(gyro_fit.step_deg[worst])
+    where = ", ".join(f"{a:.2f}-{b:.2f} s" for a, b in (move_times[i] for i in fast[:4])) + (
+        ", ..." if len(fast) > 4 else "")
+    return (f"{len(fast)} move(s) turn more than {MAX_STEP_DEG:g} deg in one sample ({where}; up to {step:.3g} deg, "
+            f"{step * rate_hz:.4g} deg/s at {rate_hz:g} Hz): too fast for the sample rate; keep the moves below "
+            f"{MAX_STEP_DEG * rate_hz / 2:.4g} deg/s or record at a higher rate")
+
+
+def detect_handled(time, gyro, accel, rate_hz: float, g: float) -> tuple[list[Segment], list[str]]:
+    """The segments of a session by hand (module docstring), and notes on what was found.
+
+    Raises
+    ------
+    InputError
+        No motion, too few rests, rests that span too few directions, moves too fast for the sample rate.
     """
     dt = 1.0 / rate_hz
-    rests, shortest = hand_rests(gyro, accel, rate_hz)
-    if len(rests) < 2:
-        raise InputError(None, f"fewer than two rests of at least {shortest:.3g} s: no schedule")
-    biases = np.array([gyro[a:b].mean(axis=0) for a, b in rests])
-    ups = np.array([accel[a:b].mean(axis=0) for a, b in rests])
-    ups /= np.linalg.norm(ups, axis=1, keepdims=True)
-    size = gyro_pulse_size(gyro, rests, biases, ups)
-    notes = [f"rests of at least {shortest:.3g} s (a quarter of the longest, and what the edges and the noise "
-             f"need); gyro pulse size {size:.6g} rad from the gravity directions the moves turn; letters' heading "
-             "by convention along the chain of turns (the Earth rate is not used)"]
+    shortest = shortest_hand_rest(rate_hz)
+    rests: Rests = find_rests(gyro, accel, rate_hz, shortest)
+    if not rests.moves:
+        raise InputError(None, "no motion in the gyros or accelerometers (only rest, or noise): no schedule of "
+                               "rests and moves")
+    spans = rests.spans
+    accel_fit, gyro_fit = fit_session(gyro, accel, spans, g, dt)
+    bounds = [(round(float(time[a] - dt), 9), round(float(time[b - 1]), 9)) for a, b in spans]
+    reason = too_fast(gyro_fit, [(bounds[k][1], bounds[k + 1][0]) for k in range(len(bounds) - 1)], rate_hz)
+    if reason:
+        raise InputError(None, reason)
+    notes = [f"{len(spans)} rests at any orientation (from the changes of the signals, any offset; the shortest "
+             f"{min(b - a for a, b in spans) * dt:.3g} s), their gravity directions {spread_deg(accel_fit.up):.0f} deg "
+             f"apart at most; the gyros carry each into the next within {float(np.max(gyro_fit.miss_deg, initial=0)):.2g} "
+             "deg" + (" (the worst moves excepted: see below)" if np.any(gyro_fit.miss_deg > MAX_MISS_DEG) else "")]
+    if rests.turning:
+        notes.append(f"{len(rests.turning)} quiet stretch(es) turning at a steady rate (their mean rate stands off the "
+                     "rests'): taken for motion")
     segments: list[Segment] = []
-    group, letters = 0, None
-    for k, (a, b) in enumerate(rests):
-        start, end = round(float(time[a] - dt), 9), round(float(time[b - 1]), 9)
-        turn = None
-        if letters is not None:
-            travel = np.degrees(size * (gyro[rests[k - 1][1]:a] - (biases[k - 1] + biases[k]) / 2.0).sum(axis=0))
-            turn = nominal_turn(letters, ups[k], travel)
-            if turn is None:
-                notes.append(f"{time[rests[k - 1][1]]:.2f}-{start:.2f} s: no turn of a multiple of 90 deg leads to the "
-                             "next rest's gravity: handling between groups")
-        if turn is None:
-            letters = up_letters(ups[k])
-            if letters is None:
-                notes.append(f"{start:.2f}-{end:.2f} s: gravity is off every body axis by more than "
-                             f"{UP_TOLERANCE_DEG:g} deg: left out")
-                continue
-            group += 1
-        else:
-            axis, angle, letters = turn
-            segments.append(Segment(len(segments) + 1, group, "rotation", segments[-1].end, start, axis=axis,
-                                    angle_deg=angle))
-        segments.append(Segment(len(segments) + 1, group, "static", start, end, orientation=letters))
+    group = 1
+    for k, (start, end) in enumerate(bounds):
+        if k:
+            if gyro_fit.miss_deg[k - 1] > MAX_MISS_DEG:
+                notes.append(f"{bounds[k - 1][1]:.2f}-{start:.2f} s: the gyros carry gravity into the next rest "
+                             f"{gyro_fit.miss_deg[k - 1]:.3g} deg off the measured direction (a jolt, the sensor's "
+                             "range exceeded?): taken for handling between groups")
+                group += 1
+            else:
+                segments.append(Segment(len(segments) + 1, group, "rotation", bounds[k - 1][1], start))
+        segments.append(Segment(len(segments) + 1, group, "static", start, end))
     return segments, notes
+

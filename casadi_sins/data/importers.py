@@ -176,12 +176,14 @@ def imported_recording(time, pulses, temperature, name: str, template: dict | No
     """
     rate = rate_hz or (template["rate_hz"] if template else rate_of(time))
     time, pulses = check_time(label, np.column_stack([time, pulses]), rate)
-    if template is None:
+    if template is None or not template["segments"]:  # no schedule given: found at the site (a description's)
+        site = template["site"] if template else site
         if site is None:
             raise InputError(None, "no description to take the segments from (--segments) and no site to find them "
                                    "(--latitude)")
         rec, notes = segment_recording(time, pulses[:, :3], pulses[:, 3:], rate, site, name)
-        return dataclasses.replace(rec, temperature=temperature), notes
+        return dataclasses.replace(rec, temperature=temperature,
+                                   conditions=template["conditions"] if template else rec.conditions), notes
     rec = Recording(name=name, site=template["site"], rate_hz=rate, segments=template["segments"], time=time,
                     gyro=pulses[:, :3], accel=pulses[:, 3:], warnings=list(template["warnings"]),
                     conditions=template["conditions"], temperature=temperature)

@@ -11,6 +11,8 @@ A problem file is TOML (``format = "casadi-sins-problem/1"``)::
     [[groups]]  start = "NUE", rotations = ["+Z", "-Y 180", ...] (axis, optional angle),
                 optional angle_deg = 90 (the default angle), statics_s = [...] (each static's duration),
                 rotations_s = [...] (each rotation's duration; default [timing] rotation_s)
+    [hand]      instead of [[groups]] and [timing]: a unit moved by hand through rests at random
+                orientations (:class:`data.handplan.HandPlan`; IMU-TK's protocol; motion in :mod:`sim.hand`)
     [errors]    start_attitude_deg, rotation_rate_factor, cross_axis_rate,
                 accel_noise_ug, gyro_noise_deg_h, quantize
     [truth]     parameter = value (table unit) or {value = ..., unit = "deg/pulse"}; the 21, and any
@@ -35,6 +37,7 @@ from ..core.toml import read_toml
 from ..core.units import TO_SI
 from ..model.parameters import ParameterSet
 from ..model.registry import is_known, unit_of
+from .handplan import HandPlan, read_hand_plan
 from .recording import Segment
 
 FORMAT = "casadi-sins-problem/1"
@@ -115,7 +118,8 @@ class Deviations:
 
 @dataclasses.dataclass(frozen=True)
 class Problem:
-    """An experiment to simulate: site, rate, schedule, timing, deviations and truth."""
+    """An experiment to simulate: site, rate, schedule, timing, deviations and truth (``hand``: a session by
+    hand, whose ``groups`` are empty)."""
 
     name: str
     site: Site
@@ -126,13 +130,17 @@ class Problem:
     truth: ParameterSet
     source: Path | None = None
     description: str = ""
+    hand: HandPlan | None = None
 
     def with_changes(self, **deviations) -> "Problem":
         """A copy with some deviation settings replaced (e.g. ``start_attitude_deg=5``)."""
         return dataclasses.replace(self, deviations=dataclasses.replace(self.deviations, **deviations))
 
     def segments(self) -> list[Segment]:
-        """The nominal schedule as recording segments."""
+        """The nominal schedule as recording segments (a session by hand: rests at any orientation and free
+        moves, one group)."""
+        if self.hand is not None:
+            return self.hand.segments()
         segs: list[Segment] = []
         t = 0.0
         for gi, plan in enumerate(self.groups, start=1):
@@ -215,7 +223,14 @@ class _Reader:
             raise self.fail("[timing] durations must be positive (gap_s may be 0)")
         return timing
 
+    def hand(self) -> HandPlan | None:
+        return read_hand_plan(self.doc.get("hand"), self.path)
+
     def groups(self) -> tuple[GroupPlan, ...]:
+        if "hand" in self.doc:
+            if self.doc.get("groups"):
+                raise self.fail("a problem has [[groups]] (a turntable) or [hand] (a session by hand), not both")
+            return ()
         items = self.doc.get("groups", [])
         if not isinstance(items, list) or not items:
             raise self.fail("no [[groups]]")
@@ -312,7 +327,8 @@ def load_problem(path: str | Path | None = None) -> Problem:
     reader = _Reader(path, doc)
     problem = Problem(name=safe_stem(str(doc.get("name", path.stem))), site=reader.site(), rate_hz=reader.rate_hz(),
                       groups=reader.groups(), timing=reader.timing(), deviations=reader.deviations(),
-                      truth=reader.truth(), source=path, description=str(doc.get("description", "")))
+                      truth=reader.truth(), source=path, description=str(doc.get("description", "")),
+                      hand=reader.hand())
     try:
         problem.segments()
     except orient.OrientationError as exc:

@@ -47,8 +47,8 @@ class Segment:
     kind: str  # "static" | "rotation"
     start: float
     end: float
-    orientation: str | None = None  # static: nominal direction letters
-    axis: str | None = None  # rotation: "+X" ... "-Z"
+    orientation: str | None = None  # static: nominal direction letters; None: a rest at any orientation
+    axis: str | None = None  # rotation: "+X" ... "-Z"; None (with angle_deg): a free move
     angle_deg: float | None = None  # rotation: nominal angle
 
     @property
@@ -56,10 +56,21 @@ class Segment:
         """A static segment (else a rotation)."""
         return self.kind == "static"
 
+    @property
+    def is_free(self) -> bool:
+        """A rest at any orientation (no letters) or a move without a nominal axis and angle: a session by hand."""
+        return self.orientation is None if self.is_static else self.axis is None
+
+    @property
+    def what(self) -> str:
+        """``"USE"``, ``"+Z 90 deg"``; ``"free"`` and ``"free move"`` for the segments of a session by hand."""
+        if self.is_static:
+            return self.orientation or "free"
+        return "free move" if self.axis is None else f"{self.axis} {self.angle_deg:g} deg"
+
     def describe(self) -> str:
         """``"segment 3 (group 1, static USE, 110-210 s)"``, for messages."""
-        what = self.orientation if self.is_static else f"{self.axis} {self.angle_deg:g} deg"
-        return f"segment {self.number} (group {self.group}, {self.kind} {what}, {self.start:g}-{self.end:g} s)"
+        return f"segment {self.number} (group {self.group}, {self.kind} {self.what}, {self.start:g}-{self.end:g} s)"
 
 
 @dataclasses.dataclass
@@ -76,6 +87,9 @@ class Recording:
         The description's ``[conditions]`` (empty when not given).
     temperature : ndarray (N,) or None
         The CSV's optional ``temperature`` column, degC.
+    notes : list of str
+        What was found or assumed in reading it, without doubt (a schedule found from the samples, when the
+        description has no segments); doubts are ``warnings``.
     """
 
     name: str
@@ -89,6 +103,7 @@ class Recording:
     warnings: list[str] = dataclasses.field(default_factory=list)  # doubts about the data, for the reports
     conditions: Conditions = dataclasses.field(default_factory=Conditions)
     temperature: np.ndarray | None = None  # degC per sample, when the CSV has the column
+    notes: list[str] = dataclasses.field(default_factory=list)  # what was found or assumed (a schedule found), no doubt
 
     @property
     def dt(self) -> float:
@@ -252,6 +267,8 @@ def _check_orientation_chain(rec: Recording) -> None:
     for group in rec.group_ids:
         segs = rec.group_segments(group)
         for before, rot, after in zip(segs[0::2], segs[1::2], segs[2::2]):
+            if before.is_free or rot.is_free or after.is_free:
+                continue  # no letters to chain: the measured gravity directions say what the move did
             nominal = 90.0 * round(rot.angle_deg / 90.0)
             angle = nominal if abs(rot.angle_deg - nominal) <= CHAIN_ANGLE_TOLERANCE_DEG else rot.angle_deg
             expected = orient.rotate_body(orient.orientation_to_dcm(before.orientation), rot.axis, np.radians(angle))

@@ -17,6 +17,7 @@ from ..core.errors import InputError
 from .edges import activity, angle_track, trim_rest
 from .recording import Recording, Segment, validate_schedule
 from .rests import minimum_rest
+from .stillness import rest_baseline
 
 
 #: Motion inside a stated static segment that turns less than this is a jerk of the hand (a wobble).
@@ -29,7 +30,8 @@ def _quiet_part(rec: Recording, seg: Segment, moving: np.ndarray, shortest_s: fl
     With motion between them the segment keeps its longest quiet run (a warning says so) when the rest of it
     is a jerk of the hand (turning less than :data:`JERK_DEG`) or a turn with pauses shorter than a rest
     (``shortest_s``) that the turn beside it takes over (the calibration navigates the measured motion);
-    a second position inside it (a quiet run of a rest's length beyond a turn) is an error naming it.
+    a second position inside it (a quiet run of a rest's length beyond a turn) is an error naming it, unless the
+    segment is a rest at any orientation: its free moves take whatever is no rest (no letters to contradict).
     """
     sl = rec.segment_samples(seg)
     flags = moving[sl]
@@ -48,9 +50,10 @@ def _quiet_part(rec: Recording, seg: Segment, moving: np.ndarray, shortest_s: fl
     rest = rec.gyro[inside][~moving[inside]].mean(axis=0)
     turned = np.degrees(np.linalg.norm(_rad_per_pulse(rec) * (rec.gyro[inside] - rest).sum(axis=0)))
     other_rest = any((b - a) * rec.dt >= shortest_s for a, b in runs[:-1])
-    if other_rest and not turned < JERK_DEG:
+    if other_rest and not turned < JERK_DEG and not seg.is_free:
         raise refusal
-    what = f"a jerk of {turned:.2g} deg" if turned < JERK_DEG else "part of the turn beside it"
+    what = (f"a jerk of {turned:.2g} deg" if turned < JERK_DEG else
+            "motion" if seg.is_free else "part of the turn beside it")
     return sl.start + int(first), sl.start + int(stop), (
         f"{seg.describe()}: {what} inside it ({times[0]:.2f}-{times[-1]:.2f} s); its longest quiet part is kept "
         "and the turns beside it take the rest")
@@ -63,6 +66,8 @@ def _rad_per_pulse(rec: Recording) -> np.ndarray:
     for group in rec.group_ids:
         segs = rec.group_segments(group)
         for before, rotation in zip(segs[0::2], segs[1::2]):
+            if rotation.is_free:
+                continue
             rest = rec.gyro[rec.segment_samples(before)].mean(axis=0)
             part = rec.segment_samples(rotation)
             total = float(np.linalg.norm((rec.gyro[part] - rest).sum(axis=0)))
@@ -82,13 +87,16 @@ def refine(rec: Recording, min_rest_s: float | None = None) -> Recording:
     (naming it), and a rest shorter than ``min_rest_s`` (default: what a rest must determine given the
     measured noise and rate, :func:`data.rests.minimum_rest`).
 
-    The rate magnitude finds motion well inside a segment; the edges are then placed at the fitted onset
+    The rate magnitude (after each stated rest's own level, offset and bias included, is taken off) finds motion
+    well inside a segment; the edges are then placed at the fitted onset
     of the motion beside them (:func:`data.edges.trim_rest`), so that slow handling or a turn that a
     stated time runs into is cut off rather than left to look like a swaying base.  A description that
     needs nothing is returned as it is (the same object).
     """
     rule = minimum_rest(rec, min_rest_s)
-    act = activity(rec.gyro, rec.rate_hz)
+    # the size of the motion after each stated rest's own level is taken off: any offset (raw counts) works
+    baseline = rest_baseline(rec.gyro, [(sl.start, sl.stop) for sl in map(rec.segment_samples, rec.static_segments)])
+    act = activity(rec.gyro - baseline, rec.rate_hz)
     moving = act.magnitude > act.edge
     track = angle_track(rec.gyro)
     changed = []

@@ -273,18 +273,22 @@ def segment_recording(time, gyro, accel, rate_hz: float, site: Site, name: str,
     """A validated recording whose segments were found in its data (see the module docstring).
 
     Without ``min_static_s`` a turntable schedule is looked for first (rests of :data:`MIN_STATIC_S`); when
-    there is none, a session turned by hand (:mod:`data.handling`: short rests, turns off multiples of
-    90 deg, moves about several axes, gyros that do not resolve the Earth rate).
+    there is none, a session turned by hand (:mod:`data.handling`: rests at any orientation joined by free moves,
+    found from the changes of the signals whatever their offset, the gyros' resolution of the Earth rate not
+    needed).
     """
     with np.errstate(all="ignore"):  # absurd pulses (1e300) end in a reason, not in a page of warnings
         segments, notes = _detect_any(time, gyro, accel, rate_hz, site, min_static_s)
     rec = Recording(name=name, site=site, rate_hz=rate_hz, segments=segments, time=time, gyro=gyro, accel=accel)
     validate_schedule(rec)
+    if any(s.is_free for s in rec.segments):  # the rests as the calibration's check of them leaves them
+        rec = dataclasses.replace(refine(rec, min_rest_s=rec.dt), warnings=[])
     return rec, notes
 
 
 def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: float | None):
-    """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled`."""
+    """:func:`detect`, and when it finds no turntable schedule, :func:`data.handling.detect_handled` (rests at any
+    orientation, free moves; the changes of the signals, so that any offset works)."""
     if min_static_s is not None:
         try:
             return detect(time, gyro, accel, rate_hz, site, min_static_s)
@@ -296,14 +300,16 @@ def _detect_any(time, gyro, accel, rate_hz: float, site: Site, min_static_s: flo
     try:
         return detect(time, gyro, accel, rate_hz, site, MIN_STATIC_S)
     except InputError as table_error:
-        if table_error.reason.startswith("no motion"):
-            raise
         try:
-            segments, notes = detect_handled(time, gyro, accel, rate_hz)
+            segments, notes = detect_handled(time, gyro, accel, rate_hz, site.g)
         except InputError as hand_error:
-            raise InputError(None, f"{table_error.reason}; as a session turned by hand: {hand_error.reason}") from None
+            if table_error.reason.startswith("no motion") or hand_error.reason.startswith("no motion"):
+                raise hand_error from None  # the offset-free test of the two: its reason alone
+            raise InputError(None, f"{table_error.reason}; as a session by hand: {hand_error.reason}") from None
         segments = _with_rotations(segments, notes)
         if not segments:
-            raise InputError(None, f"{table_error.reason}; as a session turned by hand: no two rests are joined by a "
-                                   "turn") from None
-        return segments, [f"no turntable schedule ({table_error.reason}): segmented as a session turned by hand"] + notes
+            raise InputError(None, f"{table_error.reason}; as a session by hand: no two rests are joined by a "
+                                   "move") from None
+        why = "" if table_error.reason.startswith("no motion") else f" ({table_error.reason})"  # by magnitude: offsets
+        return segments, [f"no turntable schedule{why}: segmented as a session turned by hand (rests at any "
+                          "orientation, free moves)"] + notes

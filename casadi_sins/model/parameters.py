@@ -208,14 +208,33 @@ class Separation:
         return not self.weak and not self.correlated
 
 
-def separation(params: ParameterSet) -> Separation:
-    """Weak parameters and inseparable pairs of an estimate's covariance (see :class:`Separation`)."""
+def offset_free_covariance(params: ParameterSet) -> np.ndarray:
+    """The covariance with each of the 21's biases taken at its axis's scale factor, ``B_i - (B_i / S_i) S_i``
+    linearised at the values: raw counts with an offset make ``B = S x offset / dt``, so that the bias's own
+    uncertainty is the scale factor's times the offset, correlated with it to 0.9999; at its scale factor it is
+    what the data leave of it.  For pulses without an offset the change is below round-off of the sigmas."""
+    jac = np.eye(len(params.names))
+    for sensor in ("accel", "gyro"):
+        for axis in "xyz":
+            bias, scale = f"{sensor}_bias_{axis}", f"{sensor}_scale_{axis}"
+            if bias in params.names and scale in params.names and params[scale] != 0.0:
+                jac[params.names.index(bias), params.names.index(scale)] = -params[bias] / params[scale]
+    return jac @ params.covariance @ jac.T
+
+
+def separation(params: ParameterSet, levels: dict[str, float] | None = None) -> Separation:
+    """Weak parameters and inseparable pairs of an estimate's covariance (see :class:`Separation`), the biases at
+    their scale factors (:func:`offset_free_covariance`); ``levels`` replaces the groups' ``weak_level`` of the
+    names it gives (natural units: thresholds by the unit's grade)."""
     if params.covariance is None:
         return Separation([], [], float("nan"))
-    sigma = params.natural_sigma()
-    weak = [(n, float(s), natural_unit_of(n)) for n, s in zip(params.names, sigma) if s > group_of(n).weak_level]
-    sd = np.sqrt(np.clip(np.diag(params.covariance), 1e-300, None))
-    corr = params.covariance / np.outer(sd, sd)
+    covariance = offset_free_covariance(params)
+    sigma = ParameterSet(params.values, covariance=covariance, names=params.names).natural_sigma()
+    levels = levels or {}
+    weak = [(n, float(s), natural_unit_of(n)) for n, s in zip(params.names, sigma)
+            if s > levels.get(n, group_of(n).weak_level)]
+    sd = np.sqrt(np.clip(np.diag(covariance), 1e-300, None))
+    corr = covariance / np.outer(sd, sd)
     n = len(params.names)
     pairs = sorted(((abs(corr[i, j]), i, j) for i in range(n) for j in range(i + 1, n)
                     if abs(corr[i, j]) > CORRELATION_LIMIT), reverse=True)

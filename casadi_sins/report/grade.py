@@ -19,7 +19,8 @@ import numpy as np
 from ..core.earth import EARTH_RATE
 from ..core.orientation import parse_axis
 from ..core.units import DEG_PER_H
-from ..model.registry import GYRO_BIAS, GYRO_SCALE
+from ..model.output import compensate
+from ..model.registry import GYRO_BIAS, GYRO_SCALE, N_PARAMS
 
 #: The gyro bias sigma, as a share of the horizontal Earth rate, above which the Earth rate is no reference.
 EARTH_RATE_SHARE = 0.1
@@ -28,17 +29,41 @@ EARTH_RATE_SHARE = 0.1
 STEP_ANGLE_DEG = 1.0
 
 
-def horizontal_turns(rec) -> dict[str, int]:
-    """Per gyro axis, the rotations about it that start with that axis horizontal (the letter of the static
-    before is N, S, E or W): the turns whose angle gravity sees."""
+#: A free move turns a gyro axis while it is horizontal when it turns about it by more than this (deg) and the axis
+#: lies within :data:`LEVEL_DEG` of level in the rest before (gravity measured by the calibrated accelerometers).
+FREE_TURN_DEG = 45.0
+LEVEL_DEG = 45.0
+
+
+def horizontal_turns(rec, values=None) -> dict[str, int]:
+    """Per gyro axis, the rotations about it that start with that axis horizontal: the turns whose angle gravity
+    sees.  A turn with letters counts when the letter of the static before is N, S, E or W; a free move (a session
+    by hand) by the measured gravity direction of the rest before and the compensated rates of the move
+    (``values``: the calibrated parameters), for every axis it turns by more than :data:`FREE_TURN_DEG`."""
     count = {axis: 0 for axis in "xyz"}
     for group in rec.group_ids:
         segs = rec.group_segments(group)
         for before, rotation in zip(segs[0::2], segs[1::2]):
+            if before.is_free or rotation.is_free:
+                if values is not None:
+                    for i in _free_turn_axes(rec, before, rotation, values):
+                        count["xyz"[i]] += 1
+                continue
             i = int(np.argmax(np.abs(parse_axis(rotation.axis))))
             if before.orientation[i] in "NSEW":
                 count["xyz"[i]] += 1
     return count
+
+
+def _free_turn_axes(rec, before, move, values) -> list[int]:
+    """The gyro axes a free move turns by more than :data:`FREE_TURN_DEG` while level within :data:`LEVEL_DEG` in
+    the rest before (the body's turn about each axis, from the compensated rates)."""
+    rest, sl = rec.segment_samples(before), rec.segment_samples(move)
+    _, dv = compensate(rec.gyro[rest], rec.accel[rest], values, rec.dt)
+    up = dv.sum(axis=0) / max(float(np.linalg.norm(dv.sum(axis=0))), 1e-300)
+    dtheta, _ = compensate(rec.gyro[sl], rec.accel[sl], values, rec.dt)
+    turned = np.degrees(np.abs(dtheta.sum(axis=0)))
+    return [i for i in range(3) if turned[i] > FREE_TURN_DEG and abs(up[i]) < math.sin(math.radians(LEVEL_DEG))]
 
 
 def grade_data(params, rec) -> dict:
@@ -48,7 +73,7 @@ def grade_data(params, rec) -> dict:
     sigma = params.sigma[GYRO_BIAS] if params.sigma is not None else np.full(3, np.nan)
     worst = float(np.nanmax(sigma)) if np.isfinite(sigma).any() else math.nan
     reference = bool(math.isfinite(worst) and worst < EARTH_RATE_SHARE * horizontal)
-    turns = horizontal_turns(rec)
+    turns = horizontal_turns(rec, params.values[:N_PARAMS])
     sentences = []
     if reference:
         sentences.append(f"The gyros resolve the Earth rate ({horizontal / DEG_PER_H:.3g} deg/h horizontal here; gyro "

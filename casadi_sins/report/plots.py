@@ -105,7 +105,7 @@ def plot_residuals(rec: Recording, residuals: dict[str, dict], path: str | Path)
         t, _ = next(iter(residuals.values()))[seg.number]
         for axis in range(3):
             axes[axis].axvline(offset, color="0.8", lw=0.6)
-        axes[0].text(offset + 2, 1.02, seg.orientation, transform=axes[0].get_xaxis_transform(), fontsize=7)
+        axes[0].text(offset + 2, 1.02, seg.orientation or "", transform=axes[0].get_xaxis_transform(), fontsize=7)
         offset += (t[-1] - t[0]) * 1.08
     for axis, label in enumerate("ENU"):
         axes[axis].set_ylabel(f"v_{label} (mm/s)")

@@ -28,7 +28,11 @@ def recording_summary(rec: Recording) -> str:
     ]
     for group in rec.group_ids:
         segs = rec.group_segments(group)
-        chain = " ".join(s.orientation if s.is_static else f"-{s.axis}->" for s in segs)
+        if all(s.is_free for s in segs):  # a session by hand: the count, not a chain of dozens of "free"
+            rests = sum(s.is_static for s in segs)
+            chain = f"{rests} rests at any orientation joined by {len(segs) - rests} free moves"
+        else:
+            chain = " ".join(s.orientation or "rest" if s.is_static else f"-{s.axis or 'move'}->" for s in segs)
         lines.append(f"  group {group}: {chain}  ({segs[0].start:g}-{segs[-1].end:g} s)")
     return "\n".join(lines)
 
@@ -38,7 +42,7 @@ def static_velocity_table(rec: Recording, navs: list[GroupNavigation]) -> pd.Dat
     rows = []
     for seg, t, v in static_velocities(rec, navs):
         slope = np.polyfit(t - t[0], v, 1)[0]
-        rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.orientation,
+        rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.what,
                      "v_east_mps": v[-1, 0], "v_north_mps": v[-1, 1], "v_up_mps": v[-1, 2],
                      "slope_east_ug": slope[0] / UG, "slope_north_ug": slope[1] / UG,
                      "slope_up_ug": slope[2] / UG})

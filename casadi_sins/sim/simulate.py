@@ -29,6 +29,7 @@ from ..model.groups.physics import sensed_outputs
 from ..model.output import output_model
 from ..model.parameters import ParameterSet
 from ..model.registry import ACCEL_SCALE, GROUPS, GYRO_SCALE, N_PARAMS, groups_in
+from .hand import hand_increments, plan_hand
 from .motion import MotionPiece, Sway, kinematics_function, plan_motion
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
@@ -97,10 +98,10 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
     return dtheta, dv
 
 
-def sensor_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None):
+def sensor_extras(kinematics, problem: Problem, n_samples: int, dt: float):
     """The extra groups of the truth in every sample: ``(dv_f, gyro_extra, accel_extra)``
-    (:func:`model.groups.physics.sensed_outputs`, each group's exact physics by quadrature, in chunks)."""
-    kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
+    (:func:`model.groups.physics.sensed_outputs`, each group's exact physics by quadrature, in chunks), from
+    ``kinematics(t) -> (C_b^n, w_b, w_dot_b, f_b)``."""
     truth = problem.truth.as_dict()
     present = [GROUPS[k] for k in groups_in(problem.truth.names)]
     parts = []
@@ -141,21 +142,27 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
         ``False`` leaves out the sensor noise (not the deviations), for checks.
     """
     rng = np.random.default_rng(seed)
-    pieces, starts, statics, factors = plan_motion(problem, rng)
     dev = problem.deviations
-    # drawn after the motion, so that adding sway leaves the other draws of a seed as they were
-    sway = (Sway.draw(tuple(a * ARCSEC for a in dev.sway_amplitude_arcsec), dev.sway_period_s,
-                      dev.sway_components, rng) if dev.sways else None)
     dt = 1.0 / problem.rate_hz
-    duration = pieces[-1].t1
-    n_samples = int(round(duration * problem.rate_hz))
-    g = problem.site.g
-    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway, progress)
+    sway = None
+    if problem.hand is not None:  # a session by hand (sim.hand)
+        motion = plan_hand(problem, rng)
+        n_samples = int(round(motion.pieces[-1].t1 * problem.rate_hz))
+        dtheta, dv = hand_increments(motion, n_samples, dt, problem.hand.clock_jitter, rng)
+        kinematics, starts, statics, factors = motion.kinematics, {1: motion.rest_attitudes[0]}, motion.rest_attitudes, []
+    else:
+        pieces, starts, statics, factors = plan_motion(problem, rng)
+        # drawn after the motion, so that adding sway leaves the other draws of a seed as they were
+        sway = (Sway.draw(tuple(a * ARCSEC for a in dev.sway_amplitude_arcsec), dev.sway_period_s,
+                          dev.sway_components, rng) if dev.sways else None)
+        n_samples = int(round(pieces[-1].t1 * problem.rate_hz))
+        dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, problem.site.g, sway, progress)
+        kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
     truth = problem.truth
     # what the extra groups add to K_g dtheta and K_a dv in the output model
     gyro_extra, accel_extra = np.zeros_like(dtheta), np.zeros_like(dv)
     if any(truth[n] != 0.0 for n in truth.names[N_PARAMS:]):
-        dv, gyro_extra, accel_extra = sensor_extras(pieces, problem, n_samples, dt, sway)
+        dv, gyro_extra, accel_extra = sensor_extras(kinematics, problem, n_samples, dt)
     if noise:
         gyro_white = np.hypot(dev.gyro_noise_deg_h * DEG_PER_H * dt, dev.gyro_arw_deg_rth * ARW_UNIT * np.sqrt(dt))
         accel_white = np.hypot(dev.accel_noise_ug * UG * dt, dev.accel_vrw_ug_rthz * UG * np.sqrt(dt))

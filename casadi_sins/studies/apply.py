@@ -111,7 +111,7 @@ def static_check(compensated: Recording) -> pd.DataFrame:
         w_up = float(w_mean @ up)
         w_horizontal = float(np.linalg.norm(w_mean - w_up * up))
         along_w = w_mean / np.linalg.norm(w_mean)
-        rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.orientation, "samples": n,
+        rows.append({"segment": seg.number, "group": seg.group, "orientation": seg.what, "samples": n,
                      "gravity_error_ug": (np.linalg.norm(f_mean) - site.g) / UG,
                      "gravity_noise_ug": float(np.std(f @ up, ddof=1) / math.sqrt(n)) / UG if n > 1 else np.nan,
                      "earth_rate_error_deg_h": (np.linalg.norm(w_mean) - EARTH_RATE) / DEG_PER_H,

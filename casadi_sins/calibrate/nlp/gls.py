@@ -19,7 +19,7 @@ from ...noise.observations import ObservationKind
 from ...noise.plan import NoisePlan
 from ..result import CalibrationError
 from .graph import ResidualGraph
-from .ipopt import check_rank, quick_weights, solve_ipopt
+from .ipopt import RANK_TOLERANCE, check_rank, quick_weights, solve_ipopt
 from .likelihood import estimate_free_terms
 
 #: A step this small (in sigma) is taken as the last: the next is smaller by a factor ~1e-4 x step
@@ -76,18 +76,25 @@ class Fit:
 
 
 def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
-              tolerance: float, max_iterations: int, progress) -> Fit:
-    """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model).
+              tolerance: float, max_iterations: int, progress, presolved: tuple | None = None,
+              x0: np.ndarray | None = None, relinearise: float = None) -> Fit:
+    """Stage 1 (Ipopt, quick weights; or ``presolved``, ``(z, stats)`` of :func:`.start.presolve`: Gauss-Newton
+    under the noise model from a start fitted to the data) and stage 2 (generalised least squares under the noise
+    model).
 
     Raises
     ------
     CalibrationError
-        Ipopt did not converge (naming the unobservable variables when the Jacobian is rank deficient).
+        Stage 1 did not converge: it stopped at its iteration limit or diverged (saying so, and what to try);
+        or, at the converged point, the Jacobian is rank deficient (naming the unobservable variables).
     KeyboardInterrupt
         Ctrl-C inside Ipopt.
     """
-    weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
-    z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress)
+    if presolved is not None:
+        z, stats = presolved
+    else:
+        weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+        z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress, x0)
     if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
         raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
     if not stats["success"] and stalled(stats):
@@ -95,14 +102,71 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
                               f"{STALL_ITERATIONS} iterations: a flat valley of a misfit outside the model; the "
                               "generalised least squares takes it from there")
     elif not stats["success"]:
-        # a rank deficiency is the likelier cause: name it
-        check_rank(np.asarray(graph.jacobian(z)[1]), graph.variable_names())
-        raise CalibrationError(f"Ipopt did not converge: {stats['return_status']} after {stats['iter_count']} "
-                               f"iterations (the cap is {max_iterations}: --max-iterations)")
+        # only what was tested: the solver stopped, and says so.  A rank-deficient problem leaves Ipopt wandering
+        # along what the data do not determine: "not observable" is said only when Gauss-Newton steps in the
+        # directions they do determine settle, from the information matrix at that converged point
+        weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
+        settled, converged = settle_in_range(graph, weights, z)
+        if converged:
+            check_rank(np.asarray(graph.jacobian(settled)[1]), graph.variable_names())
+        raise CalibrationError(not_converged(stats, max_iterations))
     fit = generalised_least_squares(rec, graph, noise_plan, dataclasses.replace(noise_plan.model), z,
-                                    use_rotation_steps, progress)
+                                    use_rotation_steps, progress, relinearise=relinearise)
     fit.ipopt_stats = stats
     return fit
+
+
+#: A point is converged when the Gauss-Newton step in the directions the data determine would lower the weighted
+#: sum of squares by less than this (one unit of chi-square is what noise makes of it).
+CONVERGED_DECREASE = 1.0
+
+
+#: Gauss-Newton steps tried after a stage-1 solver stopped, before it is said not to have converged.
+SETTLE_STEPS = 10
+
+
+def settle_in_range(graph: ResidualGraph, weights, z: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Gauss-Newton steps within the range of the weighted Jacobian (singular values above
+    :data:`ipopt.RANK_TOLERANCE` of the largest; a rank-deficient problem leaves a solver wandering along the
+    others), each halved until the weighted sum of squares does not grow, from where a solver stopped:
+    ``(z, converged)``, converged when no such step would lower the sum by :data:`CONVERGED_DECREASE` or more."""
+    for _ in range(SETTLE_STEPS):
+        r, jac = graph.jacobian(z)
+        rw, jw = weights @ np.asarray(r).ravel(), weights @ np.asarray(jac)
+        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        kept = s > RANK_TOLERANCE * s[0]
+        projected = u[:, kept].T @ rw
+        if float(projected @ projected) < CONVERGED_DECREASE:
+            return z, True
+        step = -vt[kept].T @ (projected / s[kept])
+        cost = float(rw @ rw)
+        for _ in range(30):
+            trial = weights @ np.asarray(graph.residuals(z + step)).ravel()
+            if float(trial @ trial) < cost:
+                break
+            step = step / 2.0
+        else:
+            return z, False
+        z = z + step
+    return z, False
+
+
+def not_converged(stats: dict, max_iterations: int) -> str:
+    """What a stage-1 solver that did not converge did, and what to try (no judgement of the schedule: that needs a
+    converged point)."""
+    status, count = stats["return_status"], int(stats["iter_count"])
+    if status == "Maximum_Iterations_Exceeded":
+        return (f"Ipopt did not converge: it stopped at its iteration limit ({count} of {max_iterations}) still "
+                "moving: start nearer the answer (--initial P.csv: a table of this unit, or `casadi-sins rough`'s "
+                "values edited) or allow more (--max-iterations)")
+    if status == "Gauss_Newton_Not_Settled":
+        return (f"the Gauss-Newton steps from the rough values fitted to the data did not settle in {count} steps "
+                f"(the last {stats.get('last_step', float('nan')):.3g} sigma): the start is too far from the answer "
+                "or the segments hold motion as rest; check the segments (casadi-sins segment), start nearer "
+                "(--initial P.csv) or allow more (--max-iterations)")
+    return (f"Ipopt did not converge: {status} after {count} iterations (the iterates diverged or the steps "
+            "failed): start nearer the answer (--initial P.csv), check the segment times against the data "
+            "(casadi-sins validate, segment)")
 
 
 #: Ipopt at its iteration cap has converged for our purpose when the objective moved less than this (relative)
@@ -124,18 +188,22 @@ def stalled(stats: dict) -> bool:
 
 
 def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, model: SensorNoise,
-                              z: np.ndarray, use_rotation_steps: bool, progress, update_free: bool = True) -> Fit:
+                              z: np.ndarray, use_rotation_steps: bool, progress, update_free: bool = True,
+                              relinearise: float | None = None) -> Fit:
     """Gauss-Newton on the Kalman-whitened residuals from ``z`` until a step is in the linear region.
 
     With ``update_free`` the noise terms the raw data did not determine are set by restricted maximum
-    likelihood at the first linearisation (:func:`likelihood.estimate_free_terms`).
+    likelihood at the first linearisation (:func:`likelihood.estimate_free_terms`).  The noise model is rebuilt
+    along the attitudes after a step of more than ``relinearise`` sigma (default :data:`GLS_RELINEARISE_NOISE`;
+    a unit whose heading is weakly determined, a MEMS unit by hand, would chase its own whitening otherwise).
     """
+    relinearise = GLS_RELINEARISE_NOISE if relinearise is None else relinearise
     gls_steps: list[float] = []
     system = None
     for _ in range(GLS_MAX_STEPS):
         r, jac = (np.asarray(m) for m in graph.jacobian(z))
         r = r.ravel()
-        if system is None or gls_steps[-1] > GLS_RELINEARISE_NOISE:  # the attitudes barely move near the answer
+        if system is None or gls_steps[-1] > relinearise:  # the attitudes barely move near the answer
             system = NoiseSystem(graph.tracks(np.asarray(graph.trajectory(z)), use_rotation_steps,
                                               noise_plan.motions), rec.site.g, rec.site.earth_rate)
         white = system.whiten(np.column_stack([r, jac]), model).columns

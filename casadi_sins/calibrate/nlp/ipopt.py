@@ -182,8 +182,9 @@ class WeightedLeastSquares:
 
 
 def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, tolerance: float, max_iterations: int,
-                progress: Callable[[str], None] | None):
-    """Stage 1: Ipopt from the reference (all variables 0) with the ``weights`` of :func:`quick_weights`.
+                progress: Callable[[str], None] | None, x0: np.ndarray | None = None):
+    """Stage 1: Ipopt from ``x0`` (default the reference, all variables 0) with the ``weights`` of
+    :func:`quick_weights`.
 
     The Gauss-Newton Hessian ``J^T W J`` (``hessian="gauss-newton"``, as in CasADi's system-identification
     example) or Ipopt's ``"limited-memory"`` approximation, with the gradient from the compiled Jacobian
@@ -206,7 +207,7 @@ def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, toleran
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
     with interruptions() as interrupted:
         try:
-            sol = solver(x0=np.zeros(graph.n_variables))
+            sol = solver(x0=np.zeros(graph.n_variables) if x0 is None else x0)
         except RuntimeError:
             if interrupted:
                 raise KeyboardInterrupt from None

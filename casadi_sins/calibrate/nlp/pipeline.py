@@ -33,8 +33,8 @@ from ...model.parameters import ParameterSet
 from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
 from ...noise.motion import describe_motion
 from ...noise.plan import NoisePlan, plan_noise
-from ..initial import rough_parameters
-from ..limits import SCHEDULE_REMEDY, separation_warnings
+from ..initial import resolves_earth_rate, rough_parameters
+from ..limits import SCHEDULE_REMEDY, grade_levels, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from ..wander import bias_cost, describe, natural_size, record, with_wander
@@ -45,7 +45,14 @@ from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_s
 from .ipopt import quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import inseparable_group, model_groups, model_label, select_groups, unobservable_group
+from .start import RELINEARISE_NOISE, presolve, start_vector
 from .wander import estimate_bias_wander
+
+#: The navigation step (s) of a MEMS unit moved by hand, in its moves and its rests (see ``static_step_s``).
+HAND_STEP_S = 0.02
+#: The default model of a MEMS unit moved by hand: the 21 and the gyro g-sensitivity (a MEMS gyro's is hundreds of
+#: deg/h per g; in a rest of seconds it tilts the unit by tenths of a degree).
+HAND_MEMS_MODEL = ("gyro_gsens",)
 
 SIGMA_MEANING = ("1-sigma from the Gauss-Newton covariance (J^T W J)^-1 of the velocity and gyro residuals, "
                  "W from the noise model (raw-data estimate, datasheet, fit, bias wander of the static data), times the variance factor when "
@@ -76,13 +83,18 @@ class _Run:
     evidence_named: bool = False
     notes: list[str] = dataclasses.field(default_factory=list)
     left_out: dict = dataclasses.field(default_factory=dict)
+    start: str = "ipopt"  # or "gauss-newton": stage 1 from a start fitted to the data (.start)
+    navigation_grade: bool = True  # the gyros resolve the Earth rate (initial.resolves_earth_rate)
+    relinearise: float | None = None  # the GLS's noise-model rebuild threshold (sigma), default gls'
 
     def say(self, message: str) -> None:
         if self.progress:
             self.progress(f"nlp: {message}")
 
     def build(self, names) -> ResidualGraph:
-        graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
+        # the 21 of the start, the extra terms at their prior: the reference the information criterion tests against
+        reference = ParameterSet(self.initial.values[:N_PARAMS]).aligned(names)
+        graph = build_graph(self.rec, reference, self.observe_s, self.rotation_step_s,
                             self.static_step_s, names)
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
@@ -91,16 +103,24 @@ class _Run:
 
     def fit(self, graph: ResidualGraph, use_rotation_steps: bool) -> Fit:
         solve = dict(self.solve)
+        presolved, x0 = None, start_vector(graph, self.initial)
+        if self.start == "gauss-newton":
+            presolved = presolve(self.rec, graph, self.noise_plan, use_rotation_steps, solve["max_iterations"],
+                                 self.progress, x0)
+            if not presolved[1]["success"]:  # a misfit's flat valley: Ipopt, with its rule for a stalled objective
+                self.say("the Gauss-Newton steps did not settle: Ipopt goes on from where they got")
+                presolved, x0 = None, presolved[0]
         if solve["max_iterations"] is None:
             solve["max_iterations"] = max(200, 20 * graph.n_variables)
-        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress, **solve)
+        return fit_graph(self.rec, graph, self.noise_plan, use_rotation_steps, progress=self.progress,
+                         presolved=presolved, x0=x0, relinearise=self.relinearise, **solve)
 
 
 def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: str = "gauss-newton",
-                  static_block_s: float | None = None, rotation_step_s: float = ROTATION_STEP_S,
+                  static_block_s: float | None = None, rotation_step_s: float | None = None,
                   use_rotation_steps: bool | str = "auto", tolerance: float = 1e-7, max_iterations: int | None = None,
                   progress: Callable[[str], None] | None = None, noise: SensorNoise | None = None,
-                  static_step_s: float | None = None, model="21") -> CalibrationResult:
+                  static_step_s: float | None = None, model=None) -> CalibrationResult:
     """Calibrate a recording by nonlinear least squares over all rotations (CasADi + Ipopt).
 
     Parameters
@@ -114,13 +134,16 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
     static_block_s : float, optional
         Seconds between velocity observations in static segments (default
         :func:`steps.default_observation_spacing`).
-    rotation_step_s : float
-        Rotation step (40 ms: a method error below 0.001 natural units on the paper's problem; the number of
-        steps, hence the time, does not grow with the sample rate).
+    rotation_step_s : float, optional
+        Rotation step (default 40 ms: a method error below 0.001 natural units on the paper's problem; the
+        number of steps, hence the time, does not grow with the sample rate; :data:`HAND_STEP_S` for a MEMS
+        unit by hand, below).
     use_rotation_steps : bool or "auto"
         Keep the velocity steps across rotations.  ``"auto"`` keeps them unless they disagree with the
         static residuals (F-test, :data:`diagnostics.STEP_CONSISTENCY_LIMIT`): lever arms or timing offsets
-        of a real unit make velocity steps that the 21-parameter model cannot explain.
+        of a real unit make velocity steps that the 21-parameter model cannot explain.  A session by hand keeps
+        them (without them its rests' velocities are free and the accelerometers undetermined): a misfit there
+        is an error outside the model.
     tolerance : float
         Ipopt's tolerance on the gradient of the mean square weighted residual (natural units).
     max_iterations : int, optional
@@ -133,12 +156,19 @@ def calibrate_nlp(rec: Recording, initial: ParameterSet | None = None, hessian: 
         Datasheet noise terms; those not given are estimated from the data.
     static_step_s : float, optional
         Navigation step in static segments (default: the observation spacing; on a swaying base
-        :data:`steps.SWAY_STATIC_STEP_S`).
-    model : {"21", "extended", "auto"} or tuple of group keys
+        :data:`steps.SWAY_STATIC_STEP_S`; :data:`HAND_STEP_S` for a MEMS unit by hand: its moves turn at
+        hundreds of deg/s about wandering axes and a hand's tremor turns its rests, so that pulses summed over
+        40 ms of a move or a second of a rest err by tens of ug and deg/h, measured on noise-free simulations;
+        steps of 20 ms with the coning and sculling terms keep it to a few hundredths of that).
+    model : {"21", "extended", "auto"}, tuple of group keys, or None
         The parameters: the paper's 21; with every extra group of the registry (quadratic scale, lever arms,
         time offset); or ``"auto"``: the extra groups the data support (each group's Wald statistic in the
         extended fit against the Bayesian information criterion ``k ln n``), refitted with those alone.
-        Terms not estimated stay at their prior (0).
+        Terms not estimated stay at their prior (0).  None (the default): ``"21"``, and the 21 with the gyro
+        g-sensitivity (:data:`HAND_MEMS_MODEL`) for a MEMS unit (gyros that do not resolve the Earth rate,
+        :func:`initial.resolves_earth_rate`) moved by hand (rests at any orientation, free moves): its
+        g-sensitivity, left out, would bias the 21 far beyond their sigma, and the rests at many orientations
+        determine it.
 
     Raises
     ------
@@ -163,6 +193,13 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     t_start = time.perf_counter()
     observe_s = default_observation_spacing(rec) if static_block_s is None else static_block_s
     initial = initial or rough_parameters(rec)
+    navigation_grade = resolves_earth_rate(rec, initial.values)
+    mems_by_hand = any(s.is_free for s in rec.segments) and not navigation_grade
+    model = model if model is not None else (HAND_MEMS_MODEL if mems_by_hand else "21")
+    if rotation_step_s is None:
+        rotation_step_s = min(HAND_STEP_S, ROTATION_STEP_S) if mems_by_hand else ROTATION_STEP_S
+    if static_step_s is None and mems_by_hand:
+        static_step_s = HAND_STEP_S
     groups = model_groups(model)
     noise_plan = plan_noise(rec, initial.aligned(model_names(groups)), noise)
     noise_s = time.perf_counter() - t_start
@@ -170,7 +207,10 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     if static_step_s is None:
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
-               list(rec.warnings), t_start, noise_s)
+               list(rec.warnings), t_start, noise_s, navigation_grade=navigation_grade)
+    if mems_by_hand:
+        run.start = "gauss-newton"  # near the answer, and Ipopt's quick weights miss a MEMS unit's tilt walk (.start)
+        run.relinearise = RELINEARISE_NOISE  # its heading, weakly determined, would chase its own whitening
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
     return run
@@ -221,6 +261,10 @@ def _separable_graph(run: _Run, graph: ResidualGraph) -> ResidualGraph:
 def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[ResidualGraph, Fit]:
     """Stage 3: fit with the velocity steps across rotations (dropped when unmodelled), and model selection."""
     modes = [True, False] if use_rotation_steps == "auto" else [bool(use_rotation_steps)]
+    if use_rotation_steps == "auto" and any(s.is_free for s in run.rec.segments):
+        # a session by hand without its velocity steps across the moves leaves each rest's velocity free: the
+        # accelerometers would go undetermined; a misfit there is an error outside the model (stage 4) instead
+        modes = [True]
     for mode in modes:
         if not mode:  # without the steps across rotations only the groups that need no steps remain observable
             kept = tuple(g for g in groups_in(graph.names) if not GROUPS[g].needs_rotation_steps)
@@ -308,7 +352,7 @@ def _bias_wander(run: _Run, graph: ResidualGraph, fit: Fit) -> Fit:
         return fit
     stats, before = fit.ipopt_stats, fit.covariance_natural
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, model, fit.z, fit.use_rotation_steps,
-                                    run.progress, update_free=False)
+                                    run.progress, update_free=False, relinearise=run.relinearise)
     fit.ipopt_stats = stats
     for sensor, wander in run.wander.items():
         if wander.included:  # what it cost (natural units scale each bias alike: the ratio is unit-free)
@@ -335,7 +379,7 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
             f"unmodelled step {unmodelled.unmodelled_step * 1e3:.3g} mm/s per rotation added")
     stats = fit.ipopt_stats
     fit = generalised_least_squares(run.rec, graph, run.noise_plan, unmodelled, fit.z, fit.use_rotation_steps,
-                                    run.progress, update_free=False)
+                                    run.progress, update_free=False, relinearise=run.relinearise)
     fit.ipopt_stats = stats
     first = [c for c in assessment.checks if not c.passed and c.value > c.limit]  # beyond (not below) the model
     assessment = assess(graph, fit, run.noise_plan)
@@ -375,7 +419,9 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
     params = ParameterSet(values, covariance=covariance, names=names)
     remedy = ("their sigma carries the misfit of the terms outside the model named above (--model auto), not "
               "the schedule") if run.evidence_named else SCHEDULE_REMEDY
-    separation_checks, separation_text = separation_warnings(params, run.wander, remedy)
+    # a navigation-grade unit is judged by the navigation-grade levels; any other by what its own noise could give
+    levels = None if run.navigation_grade else grade_levels(names, model, rec)
+    separation_checks, separation_text = separation_warnings(params, run.wander, remedy, levels)
     assessment.checks += separation_checks
     assessment.warnings += separation_text
     warnings = run.warnings + run.noise_plan.warnings + assessment.warnings  # shown once, with the result

@@ -72,8 +72,8 @@ def cmd_simulate(args) -> int:
 def cmd_validate(args) -> int:
     """``validate``: read and check a recording, print its schedule."""
     rec = read_recording(args.recording)
-    for note in rec.notes:
-        print(f"note: {note}")
+    for text in rec.notes:
+        note(text)
     print(recording_summary(rec))
     print("valid sins-recording/1")
     return 0
@@ -160,8 +160,8 @@ def cmd_calibrate(args) -> int:
         check_writable(args.report, directory=True)
     sheet = read_acceptance_sheet(args.tolerance) if args.tolerance else None
     rec = read_recording(args.recording)
-    for note in rec.notes if not getattr(args, "quiet", False) else ():  # a schedule found from the samples (no [[segments]])
-        print(f"note: {note}", file=sys.stderr)
+    for text in rec.notes if not getattr(args, "quiet", False) else ():  # a schedule found from the samples (no [[segments]])
+        note(text)
     rec = refine(rec, args.min_rest_s)  # approximate segment times: trimmed, or rejected
     truth = read_table(args.truth) if args.truth else None
     initial = read_table(args.initial) if args.initial else None

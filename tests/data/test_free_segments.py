@@ -55,8 +55,8 @@ def test_a_description_without_segments_is_segmented_when_read(written, tmp_path
     assert len(rec.static_segments) == 14 and all(s.is_free for s in rec.segments)
     assert rec.notes[0].endswith("no [[segments]]: the schedule was found from the samples") and not rec.warnings
     assert main(["validate", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert "note:" in out and "14 rests at any orientation joined by 13 free moves" in out
+    captured = capsys.readouterr()  # the note is a diagnostic (standard error), the schedule a result
+    assert "note:" in captured.err and "14 rests at any orientation joined by 13 free moves" in captured.out
 
 
 def test_segment_takes_a_description_without_segments(written, tmp_path, capsys):

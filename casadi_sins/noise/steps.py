@@ -6,7 +6,9 @@ of the step they precede or follow:
 * at a static segment's first step the segment's gyro angle and unmodelled acceleration restart
   (``x <- D x``), the rotation's velocity error and the new unmodelled acceleration enter
   (``P <- D P D^T + P_add``);
-* after the segment's middle step its attitude error is kept (``x <- M x``);
+* after the segment's middle step its attitude error is kept (``x <- M x``); in a tapered segment
+  (:mod:`noise.taper`) the kept attitude error restarts at the segment's start and after every step gains
+  the step's weight times the attitude error (``x <- A_k x``, the weighted mean over the steps);
 
 so a step is ``x <- M Phi D x``, ``P <- M (Phi (D P D^T + P_add) Phi^T + Q) M^T``.  Steps without an
 observation are composed with the next observed one, and the Kalman filter (:mod:`noise.filter`)
@@ -40,6 +42,9 @@ def fold_covariance(track: GroupTrack, layout: Layout, phi: np.ndarray, q: np.nd
     middle = sorted(track.segment_mid)
     keep = _middle_copy(layout)
     q[middle] = keep @ q[middle] @ keep.T
+    if track.segment_taper:
+        steps, accumulate = _accumulations(track, layout)
+        q[steps] = accumulate @ q[steps] @ np.swapaxes(accumulate, 1, 2)
     return q
 
 
@@ -50,10 +55,25 @@ def fold_transition(track: GroupTrack, layout: Layout, phi: np.ndarray) -> np.nd
     restart[start, ACC] = 0.0
     if layout.unmodelled:
         restart[start, layout.ua] = 0.0
+    for steps, _ in track.segment_taper.values():  # a tapered segment's mean attitude error sums from its start
+        restart[steps[0], PM] = 0.0
     phi = phi * restart[:, None, :]
     middle = sorted(track.segment_mid)
     phi[middle] = _middle_copy(layout) @ phi[middle]
+    if track.segment_taper:
+        steps, accumulate = _accumulations(track, layout)
+        phi[steps] = accumulate @ phi[steps]
     return phi
+
+
+def _accumulations(track: GroupTrack, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """The steps of the tapered segments and ``A_k = I + W_k E`` (K, n, n) after each: the kept attitude error
+    gains the step's weight ``W_k = u_k h_k`` times the attitude error."""
+    steps = np.concatenate([s for s, _ in track.segment_taper.values()])
+    weights = np.concatenate([w for _, w in track.segment_taper.values()]) * track.step_dt[steps]
+    accumulate = np.tile(np.eye(layout.n), (len(steps), 1, 1))
+    accumulate[:, PM.start + np.arange(3), PHI.start + np.arange(3)] = weights[:, None]
+    return steps, accumulate
 
 
 def _middle_copy(layout: Layout) -> np.ndarray:

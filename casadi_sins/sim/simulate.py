@@ -29,7 +29,7 @@ from ..model.groups.physics import sensed_outputs
 from ..model.output import output_model
 from ..model.parameters import ParameterSet
 from ..model.registry import ACCEL_SCALE, GROUPS, GYRO_SCALE, N_PARAMS, groups_in
-from .motion import MotionPiece, Sway, kinematics_function, plan_motion
+from .motion import MotionPiece, Sway, Translation, kinematics_function, plan_motion
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
 
@@ -45,6 +45,7 @@ class Simulation:
     rate_factors: list[float]
     seed: int | None
     sway: "Sway | None" = None
+    translation: "Translation | None" = None
 
 
 #: Sample pieces integrated at once by quadrature (bounds the memory of long recordings).
@@ -52,13 +53,14 @@ _QUADRATURE_CHUNK = 20000
 
 
 def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_rate: np.ndarray, gravity: float,
-                    sway: Sway | None = None, progress=None):
+                    sway: Sway | None = None, progress=None, translation: Translation | None = None):
     """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1; ``progress(fraction)``,
     if given, after each piece of motion with the fraction of the experiment's time done.
 
-    Without sway a static piece is integrated in closed form; everything else by 6-point
+    Without base motion a static piece is integrated in closed form; everything else by 6-point
     Gauss-Legendre quadrature on each sample's part of the piece (the integrands are analytic
-    there): ``dtheta = int C^T (w_ie + w_sway) dt + u (alpha(b) - alpha(a))``, ``dv = int C^T g^n dt``.
+    there): ``dtheta = int C^T (w_ie + w_sway) dt + u (alpha(b) - alpha(a))``, ``dv = int C^T f^n dt``
+    with ``f^n = g^n`` plus the base's acceleration and Coriolis term (:class:`motion.Translation`).
     """
     edges = np.arange(n_samples + 1) * dt
     dtheta = np.zeros((n_samples, 3))
@@ -74,19 +76,23 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
         for first in range(0, len(a_all), _QUADRATURE_CHUNK):
             a, b = a_all[first:first + _QUADRATURE_CHUNK], b_all[first:first + _QUADRATURE_CHUNK]
             sample = np.clip(np.searchsorted(edges, 0.5 * (a + b)) - 1, 0, n_samples - 1)
-            if piece.axis is None and sway is None:
+            if piece.axis is None and sway is None and translation is None:
                 integral = (b - a)[:, None, None] * (piece.attitude.T @ references)[None]
             else:
                 nodes = a[:, None] + (b - a)[:, None] * (1.0 + _GAUSS_X[None, :]) / 2.0
                 weights = (b - a)[:, None] * _GAUSS_W[None, :] / 2.0
                 c_nodes = piece.attitude_at(nodes)  # (M, J, 3, 3)
-                if sway is None:
+                if sway is None and translation is None:
                     values = np.swapaxes(c_nodes, -1, -2) @ references  # (M, J, 3, 2)
                 else:
-                    c_nodes = sway.attitude(nodes) @ c_nodes
-                    rate = earth_rate + sway.rate(nodes)  # (M, J, 3)
-                    gravity_n = np.broadcast_to([0.0, 0.0, gravity], rate.shape)
-                    values = np.swapaxes(c_nodes, -1, -2) @ np.stack([rate, gravity_n], axis=-1)
+                    rate = np.broadcast_to(earth_rate, nodes.shape + (3,))
+                    force = np.broadcast_to([0.0, 0.0, gravity], nodes.shape + (3,))
+                    if sway is not None:
+                        c_nodes = sway.attitude(nodes) @ c_nodes
+                        rate = rate + sway.rate(nodes)  # (M, J, 3)
+                    if translation is not None:
+                        force = force + translation.force(nodes, earth_rate)
+                    values = np.swapaxes(c_nodes, -1, -2) @ np.stack([rate, force], axis=-1)
                 integral = np.einsum("mj,mjkl->mkl", weights, values)
             turned = (np.zeros((len(a), 3)) if piece.axis is None
                       else np.outer(piece.angle_at(b) - piece.angle_at(a), piece.axis))
@@ -97,10 +103,11 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
     return dtheta, dv
 
 
-def sensor_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None):
+def sensor_extras(pieces, problem: Problem, n_samples: int, dt: float, sway: Sway | None,
+                  translation: Translation | None = None):
     """The extra groups of the truth in every sample: ``(dv_f, gyro_extra, accel_extra)``
     (:func:`model.groups.physics.sensed_outputs`, each group's exact physics by quadrature, in chunks)."""
-    kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
+    kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway, translation)
     truth = problem.truth.as_dict()
     present = [GROUPS[k] for k in groups_in(problem.truth.names)]
     parts = []
@@ -146,16 +153,19 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     # drawn after the motion, so that adding sway leaves the other draws of a seed as they were
     sway = (Sway.draw(tuple(a * ARCSEC for a in dev.sway_amplitude_arcsec), dev.sway_period_s,
                       dev.sway_components, rng) if dev.sways else None)
+    translation = (Translation.draw(dev.translation_amplitude_m, dev.translation_period_s, dev.translation_components,
+                                    dev.translation_axes, dev.translation_peak_mg * 1e-3 * problem.site.g, rng)
+                   if dev.translates else None)
     dt = 1.0 / problem.rate_hz
     duration = pieces[-1].t1
     n_samples = int(round(duration * problem.rate_hz))
     g = problem.site.g
-    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway, progress)
+    dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, g, sway, progress, translation)
     truth = problem.truth
     # what the extra groups add to K_g dtheta and K_a dv in the output model
     gyro_extra, accel_extra = np.zeros_like(dtheta), np.zeros_like(dv)
     if any(truth[n] != 0.0 for n in truth.names[N_PARAMS:]):
-        dv, gyro_extra, accel_extra = sensor_extras(pieces, problem, n_samples, dt, sway)
+        dv, gyro_extra, accel_extra = sensor_extras(pieces, problem, n_samples, dt, sway, translation)
     if noise:
         gyro_white = np.hypot(dev.gyro_noise_deg_h * DEG_PER_H * dt, dev.gyro_arw_deg_rth * ARW_UNIT * np.sqrt(dt))
         accel_white = np.hypot(dev.accel_noise_ug * UG * dt, dev.accel_vrw_ug_rthz * UG * np.sqrt(dt))
@@ -176,7 +186,7 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     if sway is not None:  # the true start of a group on a swaying base
         first = {seg.group: seg.start for seg in reversed(recording.segments)}
         starts = {g: sway.attitude(np.array(first[g])) @ c for g, c in starts.items()}
-    return Simulation(recording, problem.truth, starts, statics, factors, seed, sway)
+    return Simulation(recording, problem.truth, starts, statics, factors, seed, sway, translation)
 
 
 def simulation_files(sim: Simulation, out_dir: str | Path) -> dict:

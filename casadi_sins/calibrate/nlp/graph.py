@@ -14,8 +14,9 @@ Graph
 Residuals (:mod:`noise.observations`)
     the navigated velocity at observation times in the static segments (true velocity zero), and per
     static segment the mean compensated gyro rate against the Earth rate seen in the navigated
-    attitude at the segment's middle.  The velocity sees gyro errors only through the slow attitude
-    drift; the segment mean measures them directly.
+    attitude at the segment's middle (on a swaying segment its tapered mean, :mod:`noise.taper`).
+    The velocity sees gyro errors only through the slow attitude drift; the segment mean measures
+    them directly.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from ...model.regressors import step_rows
 from ...nav.navigation import group_alignment
 from ...noise.kalman import GroupTrack
 from ...noise.observations import Observation, ObservationKind, ObservationTable
+from ...noise.taper import point_coefficients, rate_weights
 from ..steps import ROTATION_STEP_S, GroupSteps, group_track, plan_steps
 from .regressors import sample_regressors, static_rates
 from .shape import ShapeGraph, group_data, group_layout, shape_graph
@@ -88,6 +90,7 @@ class ResidualGraph:
     build_time: float
     names: tuple[str, ...] = NAMES  # the parameters, in the order of the first variables
     evaluations: dict = dataclasses.field(default_factory=lambda: {"jacobian": 0, "residuals": 0})
+    tapers: dict = dataclasses.field(default_factory=dict)  # segment -> its tapered mean's rate weights (steps)
 
     def __post_init__(self):
         self._calls = {}
@@ -149,12 +152,12 @@ class ResidualGraph:
 
     def tracks(self, trajectory: np.ndarray, use_rotation_steps: bool, motions=None) -> list[GroupTrack]:
         """The noise model's view of the groups, along the navigated attitude ``trajectory``."""
-        sway = {m.segment: m.gyro_mean_variance for m in (motions or [])}
+        sway = {m.segment: m.added_variance for m in (motions or [])}
         tracks, offset = [], 0
         for plan in self.groups:
             m = len(plan.step_dt)
             tracks.append(group_track(plan, self.observations.of_group(plan.group), self.start_attitudes[plan.group],
-                                      trajectory[:, offset:offset + m], use_rotation_steps, sway))
+                                      trajectory[:, offset:offset + m], use_rotation_steps, sway, self.tapers))
             offset += m
         return tracks
 
@@ -185,9 +188,10 @@ def _group_observations(plan: GroupSteps, first_row: int) -> list[Observation]:
 
 def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
-                names: tuple[str, ...] = NAMES) -> ResidualGraph:
+                names: tuple[str, ...] = NAMES, tapers: dict[int, float] | None = None) -> ResidualGraph:
     """The NLP of a recording around ``reference`` parameters (ordered like ``names``: the 21, then any
-    extra groups of the registry): its shape's graph (built once per shape) and the recording's data."""
+    extra groups of the registry): its shape's graph (built once per shape) and the recording's data.
+    ``tapers``: static segment -> the time-half-bandwidth of its tapered gyro mean (:mod:`noise.taper`)."""
     t0 = time.perf_counter()
     names = tuple(names)
     extended = len(names) > N_PARAMS
@@ -195,17 +199,27 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
     if extended:
         rest = static_rates(rec, reference) if "X" in blocks else None
         per_sample, boundary = sample_regressors(rec.gyro, rec.accel, reference, rec.dt, blocks, rest)
-    layouts, data, observations, plans, starts = [], [], [], [], {}
+    tapers = tapers or {}
+    layouts, data, observations, plans, starts, weights = [], [], [], [], {}, {}
     for group in rec.group_ids:
         plan = plan_steps(rec, group, observe_s, rotation_step_s, static_step_s)
         plans.append(plan)
         starts[group] = group_alignment(rec, group, reference)
-        layout, segments = group_layout(plan, names)
+        layout, segments = group_layout(plan, names, {s for s in segments_of(plan) if s in tapers})
         layouts.append(layout)
         regressors = step_rows(per_sample, boundary, plan.first, plan.stop, blocks) if extended else None
-        data.append(group_data(rec.site, plan, segments, dcm_to_quat(starts[group]), regressors))
+        for segment in segments:
+            if segment in tapers:
+                weights[segment] = rate_weights(plan.step_dt[plan.step_segment == segment], tapers[segment])
+        data.append(group_data(rec.site, plan, segments, dcm_to_quat(starts[group]), regressors,
+                               {s: point_coefficients(weights[s]) for s in segments if s in weights}))
         observations += _group_observations(plan, 3 * len(observations))
     shape, _ = shape_graph(layouts, names)
     ref = np.concatenate([reference, variable_scale(reference, names)])
     return ResidualGraph(shape, np.concatenate(data), ref, ObservationTable(observations), plans, reference, starts,
-                         time.perf_counter() - t0, names)
+                         time.perf_counter() - t0, names, tapers=weights)
+
+
+def segments_of(plan: GroupSteps) -> list[int]:
+    """The static segments of a group's plan."""
+    return [int(s) for s in np.unique(plan.step_segment[plan.step_segment >= 0])]

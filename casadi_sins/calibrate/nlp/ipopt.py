@@ -63,9 +63,10 @@ def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotat
 
     Consecutive velocity observations of a group are differenced and divided by the random walk over
     the samples between them (pitfall 7); a difference across a rotation is dropped when the steps are
-    not used.  Gyro means are divided by the white gyro noise of a segment and its sway.
+    not used.  Gyro means are divided by the white gyro noise of a segment (a tapered mean's: its weights'
+    share, :mod:`noise.taper`) and its sway.
     """
-    sway = {m.segment: m.gyro_mean_variance for m in motions}
+    sway = {m.segment: m.added_variance for m in motions}
     model = noise.complete()
     vrw = max(float(np.mean(model.accel_vrw)), ACCEL_VRW_FLOOR)
     arw = max(float(np.mean(model.gyro_arw)), GYRO_ARW_FLOOR)
@@ -87,8 +88,10 @@ def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotat
     for obs in (o for o in observations if o.kind == ObservationKind.GYRO_MEAN):
         i, seg = obs.row, obs.segment
         plan = next(p for p in graph.groups if p.group == obs.group)
-        duration = float(plan.step_dt[plan.step_segment == seg].sum())
-        variance = arw**2 / duration + sway.get(seg, np.zeros(3))
+        step_dt = plan.step_dt[plan.step_segment == seg]
+        white = (arw**2 * float(np.sum(graph.tapers[seg] ** 2 * step_dt)) if seg in graph.tapers
+                 else arw**2 / float(step_dt.sum()))
+        variance = white + sway.get(seg, np.zeros(3))
         for axis in range(3):
             rows.append(out + axis), cols.append(i + axis), vals.append(1.0 / np.sqrt(variance[axis]))
         out += 3

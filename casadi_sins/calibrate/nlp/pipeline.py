@@ -30,7 +30,7 @@ from ...data.recording import Recording
 from ...model.noise import SensorNoise
 from ...model.parameters import ParameterSet
 from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
-from ...noise.motion import describe_motion
+from ...noise.motion import describe_motion, sway_treatment
 from ...noise.plan import NoisePlan, plan_noise
 from ..initial import rough_parameters
 from ..limits import SCHEDULE_REMEDY, separation_warnings
@@ -79,8 +79,9 @@ class _Run:
             self.progress(f"nlp: {message}")
 
     def build(self, names) -> ResidualGraph:
+        tapers = {m.segment: m.taper.nw for m in self.noise_plan.motions if m.taper is not None}
         graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
-                            self.static_step_s, names)
+                            self.static_step_s, names, tapers)
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
                  f"({len(names)} parameters), {graph.n_residuals} residuals built in {graph.build_time:.2f} s")
@@ -218,8 +219,8 @@ def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[Res
             continue
         break
     if describe_motion(run.noise_plan.motions):
-        run.warnings.append(f"{describe_motion(run.noise_plan.motions)}: the static gyro means carry the sway's "
-                            f"variance, the navigation steps {run.static_step_s:g} s")
+        run.warnings.append(f"{describe_motion(run.noise_plan.motions)}: {sway_treatment(run.noise_plan.motions)}, "
+                            f"the navigation steps {run.static_step_s:g} s")
     return graph, fit
 
 

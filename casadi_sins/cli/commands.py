@@ -159,8 +159,12 @@ def cmd_calibrate(args) -> int:
     if args.strict and result.warnings:
         raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
                        + " | ".join(result.warnings))
+    if result.distrust and not args.accept_distrusted:
+        raise CliError(f"{rec.label}: the calibration's own checks do not trust its result, no parameter table written: "
+                       + " | ".join(result.distrust) + " (--accept-distrusted writes it, marked, with exit 4)")
     verdict = judge(result.parameters, sheet) if sheet else None
-    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
+    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome,
+                                        distrusted=bool(result.distrust)).encode()}
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id, verdict=verdict, certificate=args.certificate))
     report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
@@ -184,7 +188,15 @@ def cmd_calibrate(args) -> int:
                   "exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
-    return _verdict_status(verdict)
+    status = _verdict_status(verdict)
+    if result.distrust:
+        print(f"DISTRUSTED (written under --accept-distrusted, exit 4): {' | '.join(result.distrust)}", file=sys.stderr)
+        return DISTRUSTED_STATUS
+    return status
+
+
+#: Exit status of a table written under ``--accept-distrusted`` although the calibration's checks distrust it.
+DISTRUSTED_STATUS = 4
 
 
 def _verdict_status(verdict) -> int:

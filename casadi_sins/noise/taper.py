@@ -133,8 +133,9 @@ LINE_SPREAD = 0.25
 
 def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
     """The strong sinusoids of a rate (N, 3), one at a time: the highest peak of the axes' Blackman spectra
-    over ``floor`` (3,) (power per fine bin), its frequency refined on a parabola, and every line's amplitudes
-    on every axis fitted again with the mean; until no peak stands above the floor, or :data:`MAX_LINES`.
+    over ``floor`` (3,) (power per fine bin), its frequency refined on a parabola, then every line's frequency
+    and amplitudes on every axis fitted again with a straight line (:func:`_refine_lines`); until no peak
+    stands above the floor, or :data:`MAX_LINES`.
 
     A sway is many orders of magnitude above the gyro noise: a spectral window's own leakage would hide the
     tapered mean's response to it.  Fitted as lines (the axes share them: one motion seen along three axes,
@@ -146,9 +147,7 @@ def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
     taper = taper / taper.sum()
     scale = 2.0 / (n * np.sum(taper**2) * PADDING)
     cycles: list[float] = []
-    design = np.ones((n, 1))
-    coef = np.linalg.lstsq(design, rates, rcond=None)[0]
-    remainder = rates - design @ coef
+    coef, remainder = _line_fit(rates, grid, np.zeros(0))[1:]
     for _ in range(MAX_LINES):
         spectrum = np.abs(np.fft.rfft(taper[:, None] * remainder, n=PADDING * n, axis=0)) ** 2 * scale
         above = np.sum(spectrum / floor[None, :], axis=1)
@@ -163,7 +162,7 @@ def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
         cycles, coef, remainder = _refine_lines(rates, grid, np.array(cycles))
         cycles = list(cycles)
     count = len(cycles)
-    power = (coef[1:1 + count] ** 2 + coef[1 + count:] ** 2) / 2.0 if count else np.zeros((0, 3))
+    power = (coef[2:2 + count] ** 2 + coef[2 + count:] ** 2) / 2.0 if count else np.zeros((0, 3))
     return RateLines(np.array(cycles), power, remainder)
 
 
@@ -175,9 +174,10 @@ def motion_floor(n: int, step_s: float, noise_density: np.ndarray) -> np.ndarray
 
 
 def _line_fit(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
-    """Mean and lines at ``cycles`` fitted to ``rates``: ``(design, coefficients, remainder)``."""
+    """A straight line and lines at ``cycles`` fitted to ``rates``: ``(design, coefficients, remainder)``; the
+    coefficients: mean, slope, the lines' cosines, their sines."""
     arg = 2.0 * np.pi * np.outer(grid, cycles)
-    design = np.column_stack([np.ones(len(grid)), np.cos(arg), np.sin(arg)])
+    design = np.column_stack([np.ones(len(grid)), grid - 0.5, np.cos(arg), np.sin(arg)])
     coef = np.linalg.lstsq(design, rates, rcond=None)[0]
     return design, coef, rates - design @ coef
 
@@ -196,7 +196,7 @@ def _refine_lines(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
         arg = 2.0 * np.pi * np.outer(grid, cycles)
         slope = 2.0 * np.pi * grid[:, None]
         # d(fit)/d(cycles_j), per axis: 2 pi t (-a sin + b cos)
-        columns = [slope * (-np.sin(arg[:, [j]]) * coef[1 + j] + np.cos(arg[:, [j]]) * coef[1 + count + j])
+        columns = [slope * (-np.sin(arg[:, [j]]) * coef[2 + j] + np.cos(arg[:, [j]]) * coef[2 + count + j])
                    for j in range(count)]
         jac = np.stack(columns, axis=-1)  # (sample, axis, line)
         basis = np.linalg.qr(design)[0]  # the amplitudes' directions, projected out (variable projection)
@@ -204,7 +204,7 @@ def _refine_lines(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
         projected = projected.reshape(-1, count)
         step = np.linalg.lstsq(projected, remainder.reshape(-1), rcond=None)[0]
         step = np.clip(step, -LINE_SPREAD, LINE_SPREAD)
-        trial = cycles + step
+        trial = np.clip(cycles + step, 1.0, len(grid) / 2.0 - 1.0)  # a line of less than a cycle is a trend
         trial_design, trial_coef, trial_remainder = _line_fit(rates, grid, trial)
         trial_cost = float(np.sum(trial_remainder**2))
         if trial_cost >= cost:

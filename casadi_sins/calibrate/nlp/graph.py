@@ -37,6 +37,7 @@ from ...noise.kalman import GroupTrack
 from ...noise.observations import Observation, ObservationKind, ObservationTable
 from ...noise.taper import point_coefficients, rate_weights
 from ..steps import ROTATION_STEP_S, GroupSteps, group_track, plan_steps
+from .base import BaseVelocity, base_velocity
 from .regressors import sample_regressors, static_rates
 from .shape import ShapeGraph, group_data, group_layout, shape_graph
 
@@ -77,7 +78,8 @@ class ResidualGraph:
     Residual rows, in time order per group: three per velocity observation (m/s, ENU) and three per
     static segment's mean gyro rate (rad/s, body), the latter after the segment's last velocity.
     ``jacobian(z)`` keeps its linearisation: Ipopt's gradient and Hessian at one point, and the
-    generalised least squares at Ipopt's solution, share one evaluation.
+    generalised least squares at Ipopt's solution, share one evaluation.  On a moving base the base's
+    velocity adds nuisance variables after the shape's (:mod:`.base`): ``r = r_shape - B z_base``.
     """
 
     shape: ShapeGraph
@@ -91,6 +93,7 @@ class ResidualGraph:
     names: tuple[str, ...] = NAMES  # the parameters, in the order of the first variables
     evaluations: dict = dataclasses.field(default_factory=lambda: {"jacobian": 0, "residuals": 0})
     tapers: dict = dataclasses.field(default_factory=dict)  # segment -> its tapered mean's rate weights (steps)
+    base: BaseVelocity | None = None  # the base's velocity on a moving base (nuisance variables)
 
     def __post_init__(self):
         self._calls = {}
@@ -99,7 +102,15 @@ class ResidualGraph:
     def _call(self, name: str, z) -> list[np.ndarray]:
         if name not in self._calls:
             self._calls[name] = _buffered(self.shape, name)
-        return self._calls[name](np.asarray(z, dtype=float), self.data, self.ref)
+        z = np.asarray(z, dtype=float)
+        out = self._calls[name](z[:self.shape.n_variables], self.data, self.ref)
+        if self.base is None or name == "trajectory":
+            return out
+        nuisance = self.base.matrix @ z[self.shape.n_variables:]
+        if name == "residuals":
+            return [out[0].ravel() - nuisance]
+        r, jac, trajectory = out
+        return [r.ravel() - nuisance, np.hstack([jac, -self.base.matrix]), trajectory]
 
     def linearise(self, z) -> Linearisation:
         """Residuals, Jacobian and trajectory at ``z`` (the last one is kept)."""
@@ -130,7 +141,7 @@ class ResidualGraph:
     @property
     def n_variables(self) -> int:
         """Number of decision variables."""
-        return self.shape.n_variables
+        return self.shape.n_variables + (self.base.size if self.base is not None else 0)
 
     @property
     def n_residuals(self) -> int:
@@ -148,7 +159,7 @@ class ResidualGraph:
     def variable_names(self) -> list[str]:
         """Names of the decision variables."""
         return list(self.names) + [f"start attitude of group {p.group} ({axis})" for p in self.groups
-                                   for axis in "ENU"]
+                                   for axis in "ENU"] + (self.base.names if self.base is not None else [])
 
     def tracks(self, trajectory: np.ndarray, use_rotation_steps: bool, motions=None) -> list[GroupTrack]:
         """The noise model's view of the groups, along the navigated attitude ``trajectory``."""
@@ -188,10 +199,13 @@ def _group_observations(plan: GroupSteps, first_row: int) -> list[Observation]:
 
 def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
-                names: tuple[str, ...] = NAMES, tapers: dict[int, float] | None = None) -> ResidualGraph:
+                names: tuple[str, ...] = NAMES, tapers: dict[int, float] | None = None,
+                base_bands: list[tuple[float, float]] | None = None) -> ResidualGraph:
     """The NLP of a recording around ``reference`` parameters (ordered like ``names``: the 21, then any
     extra groups of the registry): its shape's graph (built once per shape) and the recording's data.
-    ``tapers``: static segment -> the time-half-bandwidth of its tapered gyro mean (:mod:`noise.taper`)."""
+    ``tapers``: static segment -> the time-half-bandwidth of its tapered gyro mean (:mod:`noise.taper`);
+    ``base_bands``: the frequency bands (Hz) of a base's linear motion, whose velocity becomes nuisance
+    variables (:mod:`.base`)."""
     t0 = time.perf_counter()
     names = tuple(names)
     extended = len(names) > N_PARAMS
@@ -216,8 +230,10 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
         observations += _group_observations(plan, 3 * len(observations))
     shape, _ = shape_graph(layouts, names)
     ref = np.concatenate([reference, variable_scale(reference, names)])
-    return ResidualGraph(shape, np.concatenate(data), ref, ObservationTable(observations), plans, reference, starts,
-                         time.perf_counter() - t0, names, tapers=weights)
+    table = ObservationTable(observations)
+    base = base_velocity(table, plans, base_bands) if base_bands else None
+    return ResidualGraph(shape, np.concatenate(data), ref, table, plans, reference, starts,
+                         time.perf_counter() - t0, names, tapers=weights, base=base)
 
 
 def segments_of(plan: GroupSteps) -> list[int]:

@@ -230,7 +230,11 @@ def _exact_problem(graph: ResidualGraph, weights: RowWeights) -> dict:
 
     symbolic = ShapeGraph(graph.shape.layouts, graph.names, compiled=False)
     w = ca.MX.sym("w", graph.n_variables)
-    r = ca.mtimes(weights.to_casadi(), symbolic.residuals(w, ca.DM(graph.data), ca.DM(graph.ref)))
+    n = graph.shape.n_variables
+    r = symbolic.residuals(w[:n], ca.DM(graph.data), ca.DM(graph.ref))
+    if graph.base is not None:
+        r = r - ca.mtimes(ca.DM(graph.base.matrix), w[n:])
+    r = ca.mtimes(weights.to_casadi(), r)
     return {"x": w, "f": 0.5 / weights.shape[0] * ca.dot(r, r)}
 
 

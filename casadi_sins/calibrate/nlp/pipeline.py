@@ -73,6 +73,7 @@ class _Run:
     wander: dict = dataclasses.field(default_factory=dict)
     evidence: dict | None = None
     evidence_named: bool = False
+    distrust: list[str] = dataclasses.field(default_factory=list)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -81,7 +82,7 @@ class _Run:
     def build(self, names) -> ResidualGraph:
         tapers = {m.segment: m.taper.nw for m in self.noise_plan.motions if m.taper is not None}
         graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
-                            self.static_step_s, names, tapers)
+                            self.static_step_s, names, tapers, base_bands(self.rec, self.noise_plan))
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
                  f"({len(names)} parameters), {graph.n_residuals} residuals built in {graph.build_time:.2f} s")
@@ -171,7 +172,27 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
                list(rec.warnings), t_start, noise_s)
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
+    linear = noise_plan.linear.describe() if noise_plan.linear is not None else None
+    if linear:
+        bands = base_bands(rec, noise_plan)
+        message = (f"{linear}: the base's velocity is estimated with the parameters, free within "
+                   f"{', '.join(f'{low:.3g}-{high:.3g} Hz' for low, high in bands)} and constant per group (the "
+                   "velocity's information in those bands is given up)")
+        run.warnings.append(message)
+        run.say(message)
     return run
+
+
+#: Frequency bins of the whole recording left on either side of a base motion's lines.
+BASE_BAND_MARGIN = 2.0
+
+
+def base_bands(rec: Recording, noise_plan: NoisePlan) -> list[tuple[float, float]] | None:
+    """The frequency bands (Hz) left to the base's velocity on a moving base (``None`` on a still one): its lines
+    with :data:`BASE_BAND_MARGIN` frequency bins of the recording on either side."""
+    if noise_plan.linear is None or not noise_plan.linear.moving:
+        return None
+    return noise_plan.linear.bands(BASE_BAND_MARGIN / float(rec.time[-1] - rec.time[0] + rec.dt))
 
 
 def _observable_graph(run: _Run) -> ResidualGraph:
@@ -312,7 +333,9 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
         if c.name in final else "") for c in first]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
-    run.warnings += unmodelled_at_bounds(unmodelled, tops)
+    at_bounds = unmodelled_at_bounds(unmodelled, tops)
+    run.warnings += at_bounds
+    run.distrust += at_bounds
     run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
                         "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
@@ -358,7 +381,7 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
         float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
         warnings, assessment.checks, assessment.variance_factor,
         NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source), run.wander),
-        run.noise_plan.motions, timings, nlp=details)
+        run.noise_plan.motions, timings, nlp=details, linear_motion=run.noise_plan.linear, distrust=run.distrust)
 
 
 def _fmt(values) -> str:

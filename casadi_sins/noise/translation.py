@@ -1,0 +1,172 @@
+"""Linear motion of the base (a deck's heave and surge): found in the static segments' specific force.
+
+In a static segment the accelerometers read gravity turned by the base's sway, plus the base's
+acceleration and their noise.  The sway's part is known from the gyros: the body turns by the
+gyro-integrated angle ``theta``, so gravity reads ``f_mean - theta x f_mean`` and the rest,
+
+    a_k = f_k - f_mean + theta_k x f_mean,
+
+is the base's acceleration plus white noise (velocity random walk and the counter's remainder), and a
+straight line (the gyros' mean rate, taken out of ``theta``, leaves a ramp of the sway's angle).
+Over blocks of :data:`BLOCK_S` its spectrum is flat without motion; a deck puts lines in it at
+periods of seconds to tens of seconds.  Their power over the white noise, summed over the segments,
+decides that the base moves (:data:`MOTION_SIGNIFICANCE` standard errors); the lines of each
+segment (:func:`noise.taper.rate_lines`) give the motion's periods and size, and the bands the
+estimator leaves to the base (:func:`motion_bands`).
+
+A bounded linear motion has no power at zero frequency: the navigated velocity carries it, and the
+estimator gives each static segment a free base velocity within these bands (:mod:`calibrate.nlp.base`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..data.recording import Recording
+from ..model.noise import SensorNoise
+from ..nav.navigation import compensated_increments
+from .taper import SLOWEST_CYCLES, motion_floor, rate_lines
+
+#: Block of the specific force (s): lines up to 1 Hz (periods down to 2 s) are told apart.
+BLOCK_S = 0.5
+#: Periods of base motion (s) counted: seconds to tens of seconds.
+PERIODS_S = (2.0, 60.0)
+#: The base moves when the specific force's power in :data:`PERIODS_S`, summed over the static segments,
+#: is this many standard errors above the white noise's, and at least :data:`MOTION_RELEVANCE` times it (a
+#: long recording would find a noise model a few per cent low significant).
+MOTION_SIGNIFICANCE = 8.0
+MOTION_RELEVANCE = 1.25
+
+
+@dataclasses.dataclass(frozen=True)
+class MotionLine:
+    """A line of the base's acceleration in one static segment."""
+
+    segment: int
+    frequency_hz: float
+    acceleration: float  # amplitude, m/s^2 (largest body axis)
+
+    @property
+    def period_s(self) -> float:
+        """Period, s."""
+        return 1.0 / self.frequency_hz
+
+    @property
+    def displacement(self) -> float:
+        """Amplitude of the displacement it makes, m."""
+        return self.acceleration / (2.0 * np.pi * self.frequency_hz) ** 2
+
+    @property
+    def velocity(self) -> float:
+        """Amplitude of the velocity it makes, m/s."""
+        return self.acceleration / (2.0 * np.pi * self.frequency_hz)
+
+
+@dataclasses.dataclass
+class LinearMotion:
+    """The base's linear motion over a recording.
+
+    Attributes
+    ----------
+    significance : float
+        The specific force's power in :data:`PERIODS_S` over the white noise's, in standard errors.
+    excess : float
+        That power over the noise's (1 without motion).
+    lines : list of MotionLine
+        The lines of every static segment.
+    """
+
+    significance: float
+    excess: float
+    lines: list[MotionLine]
+
+    @property
+    def moving(self) -> bool:
+        """Whether the base moves linearly."""
+        return self.significance > MOTION_SIGNIFICANCE and self.excess > MOTION_RELEVANCE and bool(self.lines)
+
+    def bands(self, margin_hz: float) -> list[tuple[float, float]]:
+        """:func:`motion_bands` of the lines."""
+        return motion_bands([line.frequency_hz for line in self.lines], margin_hz)
+
+    def describe(self) -> str | None:
+        """One sentence about the base's linear motion (``None`` when it does not move)."""
+        if not self.moving:
+            return None
+        periods = np.array([line.period_s for line in self.lines])
+        strongest = max(self.lines, key=lambda line: line.acceleration)
+        return (f"the base moved linearly (heave, surge: a deck or a vehicle): accelerations up to "
+                f"{strongest.acceleration / 9.80665 * 1e3:.3g} mg, displacements up to "
+                f"{max(line.displacement for line in self.lines) * 100:.3g} cm and velocities up to "
+                f"{max(line.velocity for line in self.lines) * 1e3:.3g} mm/s at periods "
+                f"{periods.min():.3g}-{periods.max():.3g} s ({self.significance:.3g} standard errors above the "
+                f"accelerometer noise)")
+
+
+def motion_bands(frequencies, margin_hz: float) -> list[tuple[float, float]]:
+    """Frequency bands (Hz) that cover ``frequencies`` with ``margin_hz`` on either side, overlapping ones merged."""
+    bands: list[list[float]] = []
+    for f in sorted(frequencies):
+        if bands and f - margin_hz <= bands[-1][1]:
+            bands[-1][1] = f + margin_hz
+        else:
+            bands.append([f - margin_hz, f + margin_hz])
+    return [(max(low, 0.0), high) for low, high in bands]
+
+
+def base_acceleration(dtheta: np.ndarray, dv: np.ndarray, dt: float, block: int) -> np.ndarray:
+    """The base's acceleration in a static segment (module docstring) from compensated increments, per block of
+    ``block`` samples (N, 3), body axes, m/s^2."""
+    count = len(dv) // block
+    force = dv[:count * block].reshape(count, block, 3).sum(axis=1) / (block * dt)
+    mean = force.mean(axis=0)
+    turns = dtheta[:count * block] - dtheta[:count * block].mean(axis=0)
+    angle = np.cumsum(turns, axis=0)
+    # the rotation vector to second order (phi' = w + phi x w / 2): sway rotations do not commute, and the
+    # summed angle alone carries their slow beat, which gravity would turn into a slow acceleration
+    previous = np.concatenate([np.zeros((1, 3)), angle[:-1]])
+    angle = angle + np.cumsum(0.5 * np.cross(previous, turns), axis=0)
+    angle = angle - 0.5 * turns  # in the middle of each sample, as its specific force
+    angle = angle.reshape(count, block, 3).mean(axis=1)  # the block's mean, as its mean specific force
+    return force - mean + np.cross(angle - angle.mean(axis=0), mean)
+
+
+def detrended(values: np.ndarray) -> np.ndarray:
+    """``values`` (N, 3) less their least-squares straight line."""
+    ramp = np.column_stack([np.ones(len(values)), np.linspace(-1.0, 1.0, len(values))])
+    return values - ramp @ np.linalg.lstsq(ramp, values, rcond=None)[0]
+
+
+def linear_motion(rec: Recording, params, noise: SensorNoise) -> LinearMotion:
+    """The base's linear motion in the static segments of a recording (module docstring)."""
+    model = noise.complete()
+    block = max(1, int(round(BLOCK_S * rec.rate_hz)))
+    step = block * rec.dt
+    # white noise of a block's mean specific force: velocity random walk, and the counter's remainder at both ends
+    white = model.accel_vrw**2 / step + 2.0 * model.accel_quantization**2 / step**2
+    density = np.sqrt(white * step)
+    power, expected, variance, lines = 0.0, 0.0, 0.0, []
+    for seg in rec.static_segments:
+        dtheta, dv = compensated_increments(rec, params, rec.segment_samples(seg))
+        accel = base_acceleration(dtheta, dv, rec.dt, block)
+        n = len(accel)
+        if n < 32:
+            continue
+        duration = n * step
+        hann = np.hanning(n + 2)[1:-1]
+        spectrum = np.abs(np.fft.rfft(hann[:, None] * detrended(accel), axis=0)) ** 2
+        noise_bin = np.sum(hann**2) * white  # expected power of a bin of white noise, per axis
+        cycles = np.arange(len(spectrum))
+        band = (cycles >= max(SLOWEST_CYCLES, duration / PERIODS_S[1])) & (cycles <= duration / PERIODS_S[0])
+        power += float(np.sum(spectrum[band] / noise_bin[None, :]))
+        expected += 3.0 * band.sum()
+        variance += 3.0 * band.sum() * (1.0 + 2.0 / 9.0)  # a Hann spectrum's neighbouring bins correlate
+        found = rate_lines(accel, motion_floor(n, step, density))
+        for f, p in zip(found.cycles, found.power):
+            if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0]:
+                lines.append(MotionLine(seg.number, f / duration, float(np.sqrt(2.0 * np.max(p)))))
+    if expected == 0.0:
+        return LinearMotion(0.0, 1.0, [])
+    return LinearMotion((power - expected) / np.sqrt(variance), power / expected, lines)

@@ -92,7 +92,9 @@ class Deviations:
     Linear motion of the base (a deck's heave and surge) carries it along: on each ENU axis named in
     ``translation_axes``, ``translation_components`` sinusoids with amplitudes uniform in
     ``translation_amplitude_m`` and periods log-uniform in ``translation_period_s``, scaled down where
-    their peak acceleration would exceed ``translation_peak_mg`` (0: no limit).
+    their peak acceleration would exceed ``translation_peak_mg`` (0: no limit).  ``reference_attitude``
+    writes an attitude reference of the base (a master INS) into the recording's optional columns, with
+    white noise of ``reference_noise_arcsec`` per sample and angle.
     """
 
     start_attitude_deg: float = 0.4  # each start attitude angle off nominal by +/- this (random sign)
@@ -114,6 +116,8 @@ class Deviations:
     translation_components: int = 1
     translation_axes: str = "NU"  # surge (north) and heave (up)
     translation_peak_mg: float = 0.0
+    reference_attitude: bool = False  # write the base's attitude as the recording's reference columns
+    reference_noise_arcsec: float = 0.0
     quantize: bool = False  # integer pulses, remainder carried
 
     @property
@@ -267,9 +271,9 @@ class _Reader:
         return values or None
 
     def deviation(self, key: str, value):
-        if key == "quantize":
+        if key in ("quantize", "reference_attitude"):
             if not isinstance(value, bool):
-                raise self.fail("[errors] quantize must be true or false")
+                raise self.fail(f"[errors] {key} must be true or false")
             return value
         if key in ("sway_components", "translation_components"):
             count = self.number({key: value}, key, "errors")

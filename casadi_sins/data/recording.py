@@ -76,6 +76,10 @@ class Recording:
         The description's ``[conditions]`` (empty when not given).
     temperature : ndarray (N,) or None
         The CSV's optional ``temperature`` column, degC.
+    reference : ndarray (N, 3) or None
+        The CSV's optional reference attitude (roll, pitch, heading, rad; Z-Y-X Euler angles from
+        north-east-down, :func:`core.rotations.euler_to_enu`): a master INS on the base, or a turntable's
+        encoders turned into the table top's attitude.  Only its changes within a static segment are used.
     """
 
     name: str
@@ -89,6 +93,7 @@ class Recording:
     warnings: list[str] = dataclasses.field(default_factory=list)  # doubts about the data, for the reports
     conditions: Conditions = dataclasses.field(default_factory=Conditions)
     temperature: np.ndarray | None = None  # degC per sample, when the CSV has the column
+    reference: np.ndarray | None = None  # (N, 3) roll, pitch, heading of an attitude reference, rad
 
     @property
     def dt(self) -> float:

@@ -16,7 +16,7 @@ import numpy as np
 from ..core.units import ARW_UNIT, VRW_UNIT
 from ..data.recording import Recording
 from ..model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
-from .motion import SegmentMotion, base_motion
+from .motion import SegmentMotion, base_motion, static_increments
 from .raw import RawNoise, estimate_sensor_noise
 from .translation import LinearMotion, linear_motion
 
@@ -68,8 +68,9 @@ def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None 
                "accel_quantization": _quantization_source(given.accel_quantization, raw.counter.get("accel", False)),
                "gyro_bias_instability": "datasheet" if given.gyro_bias_instability is not None else "not modelled",
                "accel_bias_instability": "datasheet" if given.accel_bias_instability is not None else "not modelled"}
-    motions = base_motion(rec, reference, model)
-    return NoisePlan(raw, given, model, sources, motions, warnings, linear_motion(rec, reference, model))
+    increments = static_increments(rec, reference)
+    motions = base_motion(rec, reference, model, increments)
+    return NoisePlan(raw, given, model, sources, motions, warnings, linear_motion(rec, reference, model, increments))
 
 
 def _quantization_source(given_value, counter: bool) -> str:

@@ -34,6 +34,8 @@ STEP_S = 0.1
 BANDWIDTHS = (2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0, 7.0)
 #: Motion of fewer cycles per segment is not told from a drift of the bias (nor from the spread of the mean).
 SLOWEST_CYCLES = 2
+#: The attitude rate's lines are sought in its means over this long (s): a sway's periods are many of them.
+ANALYSIS_STEP_S = 0.4
 #: Zero padding of the spectra (fine frequency grid).
 PADDING = 4
 #: A spectral bin counts as motion only above this many times the white noise's expected power (a
@@ -129,6 +131,8 @@ class RateLines:
 #: Lines sought, and the frequency uncertainty of a line (cycles per segment) over which its leakage is bounded.
 MAX_LINES = 16
 LINE_SPREAD = 0.25
+#: Lines closer than this (cycles per segment) blur in the spectrum: found together, refined together at once.
+CLOSE_LINES = 3.0
 
 
 def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
@@ -159,8 +163,14 @@ def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
         curvature = left - 2.0 * middle + right
         shift = 0.5 * (left - right) / curvature if curvature < 0 else 0.0
         cycles.append((peak + float(np.clip(shift, -0.5, 0.5))) / PADDING)
+        close = np.abs(np.array(cycles[:-1]) - cycles[-1]) < CLOSE_LINES
+        if np.any(close):  # lines closer than the spectrum resolves: their frequencies refined together
+            cycles, coef, remainder = _refine_lines(rates, grid, np.array(cycles))
+            cycles = list(cycles)
+        else:
+            coef, remainder = _line_fit(rates, grid, np.array(cycles))[1:]
+    if cycles:
         cycles, coef, remainder = _refine_lines(rates, grid, np.array(cycles))
-        cycles = list(cycles)
     count = len(cycles)
     power = (coef[2:2 + count] ** 2 + coef[2 + count:] ** 2) / 2.0 if count else np.zeros((0, 3))
     return RateLines(np.array(cycles), power, remainder)
@@ -213,6 +223,14 @@ def _refine_lines(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
     return cycles, coef, remainder
 
 
+def _mean_response(frequency_hz: np.ndarray, q: int, step_s: float) -> np.ndarray:
+    """``|H(f)|^2`` of the mean of ``q`` consecutive steps of ``step_s`` (1 at zero frequency)."""
+    x = np.pi * np.asarray(frequency_hz, dtype=float) * step_s
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(np.abs(np.sin(x)) > 1e-12, np.sin(q * x) / (q * np.sin(x)), 1.0)
+    return ratio**2
+
+
 def leakage_variance(lines: RateLines, floor: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """A bound of the variance the base motion leaves in tapered means, per axis: (3,) for one window's weights
     (N,), (3, J) for J windows' (N, J).
@@ -235,7 +253,8 @@ def leakage_variance(lines: RateLines, floor: np.ndarray, weights: np.ndarray) -
         out += lines.power[strong].T @ response
     excess = np.maximum(_spectrum(lines.remainder)[0] - floor[None, :], 0.0)
     excess[:SLOWEST_CYCLES * PADDING] = 0.0
-    out += excess.T @ np.column_stack([_response_envelope(w, len(w)) for w in columns.T])
+    envelope = np.column_stack([_response_envelope(w, len(w)) for w in columns.T])  # fine bins of the same width
+    out += excess.T @ envelope[:len(excess)]
     return out[:, 0] if weights.ndim == 1 else out
 
 
@@ -246,10 +265,16 @@ def choose_taper(rates: np.ndarray, step_s: float, noise_density: np.ndarray) ->
     candidates = [nw for nw in BANDWIDTHS if 2.0 * nw < n / 4]
     if not candidates:
         raise ValueError(f"a segment of {n} steps is too short for a tapered mean")
-    floor = motion_floor(n, step_s, noise_density)
     weights = np.column_stack([window(n, nw) / np.sum(window(n, nw)) for nw in candidates])
     noise_factor = n * np.sum(weights**2, axis=0)
-    leakage = leakage_variance(rate_lines(rates, floor), floor, weights)
+    # the lines are sought in the rate's means over ANALYSIS_STEP_S (a sway's periods are many of them); their
+    # power is restored for what the means took
+    q = max(1, min(int(round(ANALYSIS_STEP_S / step_s)), n // 64))
+    coarse = rates[:n // q * q].reshape(n // q, q, 3).mean(axis=1)
+    floor = motion_floor(len(coarse), q * step_s, noise_density)
+    lines = rate_lines(coarse, floor)
+    lines = dataclasses.replace(lines, power=lines.power / _mean_response(lines.cycles / (n * step_s), q, step_s)[:, None])
+    leakage = leakage_variance(lines, floor, weights)
     density = np.asarray(noise_density, dtype=float) ** 2
     total = np.sum(density[:, None] * noise_factor[None, :] / (n * step_s) + leakage, axis=0)
     best = int(np.argmin(total))

@@ -118,18 +118,18 @@ def motion_bands(frequencies, margin_hz: float) -> list[tuple[float, float]]:
 
 def base_acceleration(dtheta: np.ndarray, dv: np.ndarray, dt: float, block: int) -> np.ndarray:
     """The base's acceleration in a static segment (module docstring) from compensated increments, per block of
-    ``block`` samples (N, 3), body axes, m/s^2."""
+    ``block`` samples (N, 3), body axes, m/s^2: the specific force less gravity turned by the block's mean angle
+    (the rotation vector to second order, ``phi' = w + phi x w / 2``: sway rotations do not commute, and the
+    summed angle alone carries their slow beat, which gravity would turn into a slow acceleration)."""
     count = len(dv) // block
     force = dv[:count * block].reshape(count, block, 3).sum(axis=1) / (block * dt)
     mean = force.mean(axis=0)
-    turns = dtheta[:count * block] - dtheta[:count * block].mean(axis=0)
-    angle = np.cumsum(turns, axis=0)
-    # the rotation vector to second order (phi' = w + phi x w / 2): sway rotations do not commute, and the
-    # summed angle alone carries their slow beat, which gravity would turn into a slow acceleration
-    previous = np.concatenate([np.zeros((1, 3)), angle[:-1]])
-    angle = angle + np.cumsum(0.5 * np.cross(previous, turns), axis=0)
-    angle = angle - 0.5 * turns  # in the middle of each sample, as its specific force
-    angle = angle.reshape(count, block, 3).mean(axis=1)  # the block's mean, as its mean specific force
+    turns = (dtheta[:count * block] - dtheta[:count * block].mean(axis=0)).reshape(count, block, 3)
+    sums = turns.sum(axis=1)
+    before = np.cumsum(sums, axis=0) - sums  # the angle at each block's start
+    inside = (block - np.arange(block) - 0.5) / block  # a sample's share of the block's mean angle
+    angle = before + np.einsum("cbj,b->cj", turns, inside)  # the mean over each block's samples
+    angle = angle + np.cumsum(0.5 * np.cross(angle, sums), axis=0)
     return force - mean + np.cross(angle - angle.mean(axis=0), mean)
 
 
@@ -139,17 +139,19 @@ def detrended(values: np.ndarray) -> np.ndarray:
     return values - ramp @ np.linalg.lstsq(ramp, values, rcond=None)[0]
 
 
-def linear_motion(rec: Recording, params, noise: SensorNoise) -> LinearMotion:
-    """The base's linear motion in the static segments of a recording (module docstring)."""
+def linear_motion(rec: Recording, params, noise: SensorNoise, increments: dict | None = None) -> LinearMotion:
+    """The base's linear motion in the static segments of a recording (module docstring); ``increments``: the
+    static segments' compensated increments by segment number (:func:`noise.motion.static_increments`), if at
+    hand.  The lines are sought only when the power says the base moves."""
     model = noise.complete()
     block = max(1, int(round(BLOCK_S * rec.rate_hz)))
     step = block * rec.dt
     # white noise of a block's mean specific force: velocity random walk, and the counter's remainder at both ends
     white = model.accel_vrw**2 / step + 2.0 * model.accel_quantization**2 / step**2
-    density = np.sqrt(white * step)
-    power, expected, variance, lines = 0.0, 0.0, 0.0, []
+    power, expected, variance, segments = 0.0, 0.0, 0.0, []
     for seg in rec.static_segments:
-        dtheta, dv = compensated_increments(rec, params, rec.segment_samples(seg))
+        dtheta, dv = (increments[seg.number] if increments is not None
+                      else compensated_increments(rec, params, rec.segment_samples(seg)))
         accel = base_acceleration(dtheta, dv, rec.dt, block)
         n = len(accel)
         if n < 32:
@@ -163,10 +165,15 @@ def linear_motion(rec: Recording, params, noise: SensorNoise) -> LinearMotion:
         power += float(np.sum(spectrum[band] / noise_bin[None, :]))
         expected += 3.0 * band.sum()
         variance += 3.0 * band.sum() * (1.0 + 2.0 / 9.0)  # a Hann spectrum's neighbouring bins correlate
-        found = rate_lines(accel, motion_floor(n, step, density))
-        for f, p in zip(found.cycles, found.power):
-            if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0]:
-                lines.append(MotionLine(seg.number, f / duration, float(np.sqrt(2.0 * np.max(p)))))
+        segments.append((seg.number, accel, duration))
     if expected == 0.0:
         return LinearMotion(0.0, 1.0, [])
-    return LinearMotion((power - expected) / np.sqrt(variance), power / expected, lines)
+    motion = LinearMotion((power - expected) / np.sqrt(variance), power / expected, [])
+    if motion.significance > MOTION_SIGNIFICANCE and motion.excess > MOTION_RELEVANCE:
+        density = np.sqrt(white * step)
+        for number, accel, duration in segments:
+            found = rate_lines(accel, motion_floor(len(accel), step, density))
+            for f, p in zip(found.cycles, found.power):
+                if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0]:
+                    motion.lines.append(MotionLine(number, f / duration, float(np.sqrt(2.0 * np.max(p)))))
+    return motion

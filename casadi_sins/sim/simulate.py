@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.rotations import NED_TO_ENU, enu_to_euler
 from ..core.units import ARCSEC, ARW_UNIT, DEG_PER_H, UG
 from ..core.files import write_files
 from ..data.description import recording_files
@@ -182,11 +183,22 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     time = np.round(np.arange(1, n_samples + 1) * dt, 9)
     rec_name = name or (f"{problem.name}-seed{seed}" if seed is not None else problem.name)
     recording = Recording(name=rec_name, site=problem.site, rate_hz=problem.rate_hz, segments=problem.segments(),
-                          time=time, gyro=gyro, accel=accel)
+                          time=time, gyro=gyro, accel=accel,
+                          reference=base_reference(time, sway, dev.reference_noise_arcsec * ARCSEC, rng)
+                          if dev.reference_attitude else None)
     if sway is not None:  # the true start of a group on a swaying base
         first = {seg.group: seg.start for seg in reversed(recording.segments)}
         starts = {g: sway.attitude(np.array(first[g])) @ c for g, c in starts.items()}
     return Simulation(recording, problem.truth, starts, statics, factors, seed, sway, translation)
+
+
+def base_reference(time: np.ndarray, sway: Sway | None, noise_rad: float, rng: np.random.Generator) -> np.ndarray:
+    """An attitude reference on the base (a master INS): roll, pitch, heading (rad, N x 3) of the base at the
+    samples' ends, level and north at rest (:func:`core.rotations.euler_to_enu`), with white noise."""
+    attitude = np.broadcast_to(NED_TO_ENU, time.shape + (3, 3))
+    if sway is not None:
+        attitude = sway.attitude(time) @ NED_TO_ENU
+    return enu_to_euler(attitude) + rng.standard_normal((len(time), 3)) * noise_rad
 
 
 def simulation_files(sim: Simulation, out_dir: str | Path) -> dict:

@@ -19,7 +19,7 @@ from ...noise.observations import ObservationKind
 from ...noise.plan import NoisePlan
 from ..result import CalibrationError
 from .graph import ResidualGraph
-from .ipopt import check_rank, quick_weights, solve_ipopt
+from .ipopt import OBJECTIVE_CHANGE, check_rank, quick_weights, solve_ipopt
 from .likelihood import estimate_free_terms
 
 #: A step this small (in sigma) is taken as the last: the next is smaller by a factor ~1e-4 x step
@@ -76,7 +76,7 @@ class Fit:
 
 
 def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
-              tolerance: float, max_iterations: int, progress) -> Fit:
+              tolerance: float, max_iterations: int, progress, objective_change: float = OBJECTIVE_CHANGE) -> Fit:
     """Stage 1 (Ipopt, quick weights) and stage 2 (generalised least squares under the noise model).
 
     Raises
@@ -87,7 +87,7 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
         Ctrl-C inside Ipopt.
     """
     weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
-    z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress)
+    z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress, objective_change)
     if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
         raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
     if not stats["success"] and stalled(stats):

@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from ...core.compiled import Buffered
-from ...core.rotations import dcm_to_quat
+from ...core.rotations import dcm_to_quat, euler_to_enu, small_rotations
 from ...data.recording import Recording
 from ...model.registry import N_PARAMS, NAMES, natural_scale_of, regressor_blocks, relative_mask
 from ...model.regressors import step_rows
@@ -200,12 +200,13 @@ def _group_observations(plan: GroupSteps, first_row: int) -> list[Observation]:
 def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
                 names: tuple[str, ...] = NAMES, tapers: dict[int, float] | None = None,
-                base_bands: list[tuple[float, float]] | None = None) -> ResidualGraph:
+                base_bands: list[tuple[float, float]] | None = None, referenced=frozenset()) -> ResidualGraph:
     """The NLP of a recording around ``reference`` parameters (ordered like ``names``: the 21, then any
     extra groups of the registry): its shape's graph (built once per shape) and the recording's data.
     ``tapers``: static segment -> the time-half-bandwidth of its tapered gyro mean (:mod:`noise.taper`);
     ``base_bands``: the frequency bands (Hz) of a base's linear motion, whose velocity becomes nuisance
-    variables (:mod:`.base`)."""
+    variables (:mod:`.base`); ``referenced``: the tapered segments whose mean reads the gyros' attitude
+    against the recording's attitude reference (:attr:`data.recording.Recording.reference`)."""
     t0 = time.perf_counter()
     names = tuple(names)
     extended = len(names) > N_PARAMS
@@ -222,11 +223,14 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
         layout, segments = group_layout(plan, names, {s for s in segments_of(plan) if s in tapers})
         layouts.append(layout)
         regressors = step_rows(per_sample, boundary, plan.first, plan.stop, blocks) if extended else None
+        references = {}
         for segment in segments:
             if segment in tapers:
                 weights[segment] = rate_weights(plan.step_dt[plan.step_segment == segment], tapers[segment])
+            if segment in tapers and segment in referenced:
+                references[segment] = reference_turns(rec, plan, segment, point_coefficients(weights[segment]))
         data.append(group_data(rec.site, plan, segments, dcm_to_quat(starts[group]), regressors,
-                               {s: point_coefficients(weights[s]) for s in segments if s in weights}))
+                               {s: point_coefficients(weights[s]) for s in segments if s in weights}, references))
         observations += _group_observations(plan, 3 * len(observations))
     shape, _ = shape_graph(layouts, names)
     ref = np.concatenate([reference, variable_scale(reference, names)])
@@ -234,6 +238,14 @@ def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
     base = base_velocity(table, plans, base_bands) if base_bands else None
     return ResidualGraph(shape, np.concatenate(data), ref, table, plans, reference, starts,
                          time.perf_counter() - t0, names, tapers=weights, base=base)
+
+
+def reference_turns(rec: Recording, plan: GroupSteps, segment: int, coefficients: np.ndarray) -> np.ndarray:
+    """The tapered mean (ENU, rad/s) of the recording's attitude reference over a segment's steps: its rotation
+    after each step against the middle one, weighed by the mean's ``coefficients``."""
+    steps = np.flatnonzero(plan.step_segment == segment)
+    attitude = euler_to_enu(rec.reference[plan.stop[steps] - 1])
+    return coefficients @ small_rotations(attitude, attitude[len(steps) // 2])
 
 
 def segments_of(plan: GroupSteps) -> list[int]:

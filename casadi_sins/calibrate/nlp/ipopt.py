@@ -184,14 +184,22 @@ class WeightedLeastSquares:
         return {"x": x, "f": cost(x)}, opts, keep
 
 
+#: Ipopt stops when the objective changes less than this (relative) over two iterations; on a moving base more
+#: (:data:`MOVING_OBJECTIVE_CHANGE`): the tapered gyro means' weights raise the objective's round-off to 1e-9.
+OBJECTIVE_CHANGE = 1e-12
+MOVING_OBJECTIVE_CHANGE = 1e-8
+
+
 def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, tolerance: float, max_iterations: int,
-                progress: Callable[[str], None] | None):
+                progress: Callable[[str], None] | None, objective_change: float = OBJECTIVE_CHANGE):
     """Stage 1: Ipopt from the reference (all variables 0) with the ``weights`` of :func:`quick_weights`.
 
     The Gauss-Newton Hessian ``J^T W J`` (``hessian="gauss-newton"``, as in CasADi's system-identification
     example) or Ipopt's ``"limited-memory"`` approximation, with the gradient from the compiled Jacobian
     (module docstring); ``"exact"``: CasADi's algorithmic derivatives of the whole chain on its virtual
-    machine (slow; for comparison).  Returns the decision vector and Ipopt's statistics.
+    machine (slow; for comparison).  ``objective_change``: the relative change of the objective over two
+    iterations below which Ipopt has converged (:data:`OBJECTIVE_CHANGE`).  Returns the decision vector and
+    Ipopt's statistics.
     """
     if hessian == "exact":
         nlp, opts, keep = _exact_problem(graph, weights), {}, []
@@ -204,7 +212,7 @@ def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, toleran
     # weights the gradient's round-off floor can exceed any fixed tolerance although Gauss-Newton has
     # converged.
     opts.update({"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
-                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": 1e-12, "ipopt.acceptable_iter": 2,
+                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": objective_change, "ipopt.acceptable_iter": 2,
                  "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"})
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
     with interruptions() as interrupted:

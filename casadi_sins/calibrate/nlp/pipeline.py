@@ -41,7 +41,7 @@ from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
 from .evidence import candidate_groups, evidence_warning, group_evidence, is_21
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
-from .ipopt import quick_weights
+from .ipopt import MOVING_OBJECTIVE_CHANGE, quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import model_groups, model_label, select_groups, unobservable_group
 from .wander import estimate_bias_wander
@@ -81,8 +81,9 @@ class _Run:
 
     def build(self, names) -> ResidualGraph:
         tapers = {m.segment: m.taper.nw for m in self.noise_plan.motions if m.taper is not None}
+        referenced = {m.segment for m in self.noise_plan.motions if m.taper is not None and m.uses_reference}
         graph = build_graph(self.rec, self.initial.aligned(names), self.observe_s, self.rotation_step_s,
-                            self.static_step_s, names, tapers, base_bands(self.rec, self.noise_plan))
+                            self.static_step_s, names, tapers, base_bands(self.rec, self.noise_plan), referenced)
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
                  f"({len(names)} parameters), {graph.n_residuals} residuals built in {graph.build_time:.2f} s")
@@ -168,11 +169,13 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     swaying = describe_motion(noise_plan.motions)
     if static_step_s is None:
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
+    linear = noise_plan.linear.describe() if noise_plan.linear is not None else None
+    if swaying or linear:
+        solve = dict(solve, objective_change=MOVING_OBJECTIVE_CHANGE)
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
                list(rec.warnings), t_start, noise_s)
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
-    linear = noise_plan.linear.describe() if noise_plan.linear is not None else None
     if linear:
         bands = base_bands(rec, noise_plan)
         message = (f"{linear}: the base's velocity is estimated with the parameters, free within "

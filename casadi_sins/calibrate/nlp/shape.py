@@ -73,7 +73,8 @@ class GroupLayout:
         s = len(self.mids)
         return [("steps", self.n_data * self.steps), ("q_start", 4), ("earth", 3), ("gravity", 1),
                 ("segment_gyro", 3 * s), ("segment_accel", 3 * s), ("segment_dt", s),
-                ("taper", sum(count for _, count in self.tapered))]
+                ("taper", sum(count for _, count in self.tapered)),
+                ("taper_reference", 3 * sum(1 for _, count in self.tapered if count))]
 
     @property
     def size(self) -> int:
@@ -104,10 +105,11 @@ def group_layout(plan, names, tapered: set | frozenset = frozenset()) -> tuple[G
 
 
 def group_data(site, plan, segments: list[int], q_start: np.ndarray, regressors=None,
-               taper_coefficients: dict | None = None) -> np.ndarray:
+               taper_coefficients: dict | None = None, taper_references: dict | None = None) -> np.ndarray:
     """The data vector of one group (:meth:`GroupLayout.sizes`), matrices column-major; ``taper_coefficients``:
     segment -> the coefficients of its tapered mean on the attitudes after its steps
-    (:func:`noise.taper.point_coefficients`)."""
+    (:func:`noise.taper.point_coefficients`); ``taper_references``: segment -> the same mean of an attitude
+    reference's turns (ENU, rad/s; zero where none is read)."""
     steps = [plan.pulses_gyro, plan.pulses_accel, plan.step_dt[None], plan.previous_scale[None]]
     if regressors is not None:
         steps.append(regressors)
@@ -115,9 +117,10 @@ def group_data(site, plan, segments: list[int], q_start: np.ndarray, regressors=
     segment_gyro = np.array([plan.pulses_gyro[:, m].sum(axis=1) for m in masks]).reshape(-1, 3)
     segment_accel = np.array([plan.pulses_accel[:, m].sum(axis=1) for m in masks]).reshape(-1, 3)
     segment_dt = np.array([plan.step_dt[m].sum() for m in masks])
-    tapers = taper_coefficients or {}
+    tapers, references = taper_coefficients or {}, taper_references or {}
     parts = [np.vstack(steps).ravel(order="F"), q_start, site.earth_rate, [site.g], segment_gyro.ravel(),
-             segment_accel.ravel(), segment_dt] + [tapers[s] for s in segments if s in tapers]
+             segment_accel.ravel(), segment_dt] + [tapers[s] for s in segments if s in tapers] + [
+        references.get(s, np.zeros(3)) for s in segments if s in tapers]
     return np.concatenate([np.asarray(x, dtype=float).ravel() for x in parts])
 
 
@@ -131,19 +134,19 @@ def _earth_in_body(nd: int) -> ca.Function:
 
 @functools.lru_cache(maxsize=None)
 def _tapered_in_body(nd: int) -> ca.Function:
-    """``(q_mid, Q_mid, p, P) -> (r, R)``: the tapered mean ``r = C(q_mid)^T 2 vec(p q_mid^-1)`` of the weighted
-    sum ``p = sum_k c_k q_k`` of a segment's attitudes, and its tangents along the directions of ``Q_mid`` and
-    ``P`` (4 x nd each).
+    """``(q_mid, Q_mid, p, P, s) -> (r, R)``: the tapered mean ``r = C(q_mid)^T (2 vec(p q_mid^-1) - s)`` of the
+    weighted sum ``p = sum_k c_k q_k`` of a segment's attitudes (less ``s``, an attitude reference's turns
+    over the same window), and its tangents along the directions of ``Q_mid`` and ``P`` (4 x nd each).
 
     ``2 vec(q_k q_mid^-1)`` is the rotation vector of ``q_k`` against the middle attitude to third order in
     its angle (sway and drift within a segment are small), and linear in ``q_k``: the weighted sum of the
     attitudes is taken first.
     """
     q_mid, mid_tangents = ca.SX.sym("q_mid", 4), ca.SX.sym("Q_mid", 4, nd)
-    p, p_tangents = ca.SX.sym("p", 4), ca.SX.sym("P", 4, nd)
+    p, p_tangents, reference = ca.SX.sym("p", 4), ca.SX.sym("P", 4, nd), ca.SX.sym("s", 3)
     conjugate = ca.vertcat(q_mid[0], -q_mid[1:4])
-    r = quat_to_dcm_expr(q_mid).T @ (2 * quat_multiply_expr(p, conjugate)[1:4])
-    return ca.Function("tapered_in_body", [q_mid, mid_tangents, p, p_tangents],
+    r = quat_to_dcm_expr(q_mid).T @ (2 * quat_multiply_expr(p, conjugate)[1:4] - reference)
+    return ca.Function("tapered_in_body", [q_mid, mid_tangents, p, p_tangents, reference],
                        [r, ca.jtimes(r, q_mid, mid_tangents) + ca.jtimes(r, p, p_tangents)])
 
 
@@ -334,8 +337,8 @@ class ShapeGraph:
 def _tapered_rows(chain: _Chain, layout: GroupLayout, fields: dict, rows_q, nd: int, gyro_r, gyro_jac):
     """The gyro rows ``(r, J)`` (3 per segment) with the tapered segments' rows replaced by their tapered means
     (module docstring, :func:`_tapered_in_body`); ``rows_q`` ``None``: the residuals alone (no tangents)."""
-    rows, blocks, offset = [], [], 0
-    coefficients = fields["taper"]
+    rows, blocks, offset, tapered = [], [], 0, 0
+    coefficients, references = fields["taper"], fields["taper_reference"]
     for j, ((first, count), mid) in enumerate(zip(layout.tapered, layout.mids)):
         if not count:
             rows.append(gyro_r[3 * j:3 * j + 3])
@@ -343,14 +346,15 @@ def _tapered_rows(chain: _Chain, layout: GroupLayout, fields: dict, rows_q, nd: 
             continue
         steps = list(range(first, first + count))
         c = coefficients[offset:offset + count]
-        offset += count
+        reference = references[3 * tapered:3 * tapered + 3]
+        offset, tapered = offset + count, tapered + 1
         q_mid, weighted = chain.take(range(4), [mid]), chain.take(range(4), steps) @ c
         if rows_q is None:
-            rows.append(_tapered_in_body(1)(q_mid, ca.DM.zeros(4, 1), weighted, ca.DM.zeros(4, 1))[0])
+            rows.append(_tapered_in_body(1)(q_mid, ca.DM.zeros(4, 1), weighted, ca.DM.zeros(4, 1), reference)[0])
             continue
         mid_tangents = ca.reshape(chain.take(rows_q, [mid]), 4, nd)  # rows 4 i + b
         weighted_tangents = ca.reshape(chain.take(rows_q, steps) @ c, 4, nd)
-        body, body_tangents = _tapered_in_body(nd)(q_mid, mid_tangents, weighted, weighted_tangents)
+        body, body_tangents = _tapered_in_body(nd)(q_mid, mid_tangents, weighted, weighted_tangents, reference)
         rows.append(body)
         blocks.append(body_tangents)
     return ca.vertcat(*rows), (ca.vertcat(*blocks) if gyro_jac is not None else None)

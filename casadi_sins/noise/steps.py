@@ -42,9 +42,13 @@ def fold_covariance(track: GroupTrack, layout: Layout, phi: np.ndarray, q: np.nd
     middle = sorted(track.segment_mid)
     keep = _middle_copy(layout)
     q[middle] = keep @ q[middle] @ keep.T
-    if track.segment_taper:
-        steps, accumulate = _accumulations(track, layout)
-        q[steps] = accumulate @ q[steps] @ np.swapaxes(accumulate, 1, 2)
+    if track.segment_taper:  # A q A^T, A = I + W E (E: the attitude error into the kept one)
+        steps, weights = _accumulations(track)
+        w = weights[:, None, None]
+        block = q[steps]
+        block[:, PM, :] += w * block[:, PHI, :]
+        block[:, :, PM] += w * block[:, :, PHI]
+        q[steps] = block
     return q
 
 
@@ -60,20 +64,17 @@ def fold_transition(track: GroupTrack, layout: Layout, phi: np.ndarray) -> np.nd
     phi = phi * restart[:, None, :]
     middle = sorted(track.segment_mid)
     phi[middle] = _middle_copy(layout) @ phi[middle]
-    if track.segment_taper:
-        steps, accumulate = _accumulations(track, layout)
-        phi[steps] = accumulate @ phi[steps]
+    if track.segment_taper:  # A Phi, A = I + W E: the kept attitude error gains W times the attitude error
+        steps, weights = _accumulations(track)
+        phi[steps, PM, :] += weights[:, None, None] * phi[steps, PHI, :]
     return phi
 
 
-def _accumulations(track: GroupTrack, layout: Layout) -> tuple[np.ndarray, np.ndarray]:
-    """The steps of the tapered segments and ``A_k = I + W_k E`` (K, n, n) after each: the kept attitude error
-    gains the step's weight ``W_k = u_k h_k`` times the attitude error."""
+def _accumulations(track: GroupTrack) -> tuple[np.ndarray, np.ndarray]:
+    """The steps of the tapered segments and the weight ``W_k = u_k h_k`` with which the kept attitude error gains
+    the attitude error after each (``A_k = I + W_k E``)."""
     steps = np.concatenate([s for s, _ in track.segment_taper.values()])
-    weights = np.concatenate([w for _, w in track.segment_taper.values()]) * track.step_dt[steps]
-    accumulate = np.tile(np.eye(layout.n), (len(steps), 1, 1))
-    accumulate[:, PM.start + np.arange(3), PHI.start + np.arange(3)] = weights[:, None]
-    return steps, accumulate
+    return steps, np.concatenate([w for _, w in track.segment_taper.values()]) * track.step_dt[steps]
 
 
 def _middle_copy(layout: Layout) -> np.ndarray:
@@ -114,17 +115,25 @@ def component_weights(system, noise: SensorNoise, layout: Layout) -> np.ndarray:
 def compose(phi: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One transition and covariance for consecutive steps (K, n, n), composed pairwise (``q`` may hold
     several covariances per step, (K, J, n, n))."""
-    while len(phi) > 1:
-        odd = len(phi) % 2
-        first_phi, first_q = phi[0:len(phi) - odd:2], q[0:len(q) - odd:2]
-        second_phi, second_q = phi[1::2], q[1::2]
+    phi, q = compose_batch(phi[None], q[None])
+    return phi[0], q[0]
+
+
+def compose_batch(phi: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`compose` of several runs of consecutive steps at once: ``phi`` (B, K, n, n), ``q`` (B, K, n, n) or
+    (B, K, J, n, n); returns (B, n, n) and (B, [J,] n, n)."""
+    while phi.shape[1] > 1:
+        k = phi.shape[1]
+        odd = k % 2
+        first_phi, first_q = phi[:, 0:k - odd:2], q[:, 0:k - odd:2]
+        second_phi, second_q = phi[:, 1::2], q[:, 1::2]
         new_phi = second_phi @ first_phi
-        turn = second_phi[:, None] if q.ndim == 4 else second_phi  # q per variance component: (K, J, n, n)
+        turn = second_phi[:, :, None] if q.ndim == 5 else second_phi  # q per variance component: (B, K, J, n, n)
         new_q = turn @ first_q @ np.swapaxes(turn, -1, -2) + second_q
         if odd:
-            new_phi, new_q = np.concatenate([new_phi, phi[-1:]]), np.concatenate([new_q, q[-1:]])
+            new_phi, new_q = np.concatenate([new_phi, phi[:, -1:]], axis=1), np.concatenate([new_q, q[:, -1:]], axis=1)
         phi, q = new_phi, new_q
-    return phi[0], q[0]
+    return phi[:, 0], q[:, 0]
 
 
 def observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout, components: bool = False):
@@ -141,11 +150,13 @@ def observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout
     ends = np.array(observed + ([m - 1] if m and (not observed or observed[-1] != m - 1) else []), dtype=int)
     starts = np.concatenate([[0], ends[:-1] + 1]).astype(int)
     phis = phi[ends]  # an observed step right after the previous one: nothing to compose
-    qs = units[0][ends] if weights is None else np.stack([unit[ends] for unit in units], axis=1)
-    for i in np.flatnonzero(ends > starts):
-        interval = slice(starts[i], ends[i] + 1)
-        q = units[0][interval] if weights is None else np.stack([unit[interval] for unit in units], axis=1)
-        phis[i], qs[i] = compose(phi[interval], q)
+    q_all = units[0] if weights is None else np.stack(units, axis=1)
+    qs = q_all[ends]
+    lengths = ends - starts + 1
+    for length in np.unique(lengths[lengths > 1]):  # runs of one length composed together
+        which = np.flatnonzero(lengths == length)
+        rows = starts[which][:, None] + np.arange(length)[None, :]
+        phis[which], qs[which] = compose_batch(phi[rows], q_all[rows])
     return list(ends), phis, qs, weights
 
 

@@ -126,6 +126,8 @@ class RateLines:
     cycles: np.ndarray  # (L,) frequency of each line, cycles per segment
     power: np.ndarray  # (L, 3) mean square of each line on each axis, (rad/s)^2
     remainder: np.ndarray  # (N, 3) the rate less its mean and the lines
+    cosine: np.ndarray | None = None  # (L, 3) each line's amplitude of cos(2 pi f t) on the three axes
+    sine: np.ndarray | None = None  # (L, 3) and of sin(2 pi f t)
 
 
 #: Lines sought, and the frequency uncertainty of a line (cycles per segment) over which its leakage is bounded.
@@ -173,7 +175,7 @@ def rate_lines(rates: np.ndarray, floor: np.ndarray) -> RateLines:
         cycles, coef, remainder = _refine_lines(rates, grid, np.array(cycles))
     count = len(cycles)
     power = (coef[2:2 + count] ** 2 + coef[2 + count:] ** 2) / 2.0 if count else np.zeros((0, 3))
-    return RateLines(np.array(cycles), power, remainder)
+    return RateLines(np.array(cycles), power, remainder, coef[2:2 + count], coef[2 + count:])
 
 
 def motion_floor(n: int, step_s: float, noise_density: np.ndarray) -> np.ndarray:
@@ -204,11 +206,9 @@ def _refine_lines(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
     cost = float(np.sum(remainder**2))
     for _ in range(REFINE_STEPS):
         arg = 2.0 * np.pi * np.outer(grid, cycles)
-        slope = 2.0 * np.pi * grid[:, None]
-        # d(fit)/d(cycles_j), per axis: 2 pi t (-a sin + b cos)
-        columns = [slope * (-np.sin(arg[:, [j]]) * coef[2 + j] + np.cos(arg[:, [j]]) * coef[2 + count + j])
-                   for j in range(count)]
-        jac = np.stack(columns, axis=-1)  # (sample, axis, line)
+        # d(fit)/d(cycles_j), per axis: 2 pi t (-a sin + b cos), (sample, axis, line)
+        jac = 2.0 * np.pi * grid[:, None, None] * (-np.sin(arg)[:, None, :] * coef[2:2 + count].T[None]
+                                                   + np.cos(arg)[:, None, :] * coef[2 + count:].T[None])
         basis = np.linalg.qr(design)[0]  # the amplitudes' directions, projected out (variable projection)
         projected = jac - np.einsum("ij,jak->iak", basis, np.einsum("ij,iak->jak", basis, jac))
         projected = projected.reshape(-1, count)
@@ -223,7 +223,7 @@ def _refine_lines(rates: np.ndarray, grid: np.ndarray, cycles: np.ndarray):
     return cycles, coef, remainder
 
 
-def _mean_response(frequency_hz: np.ndarray, q: int, step_s: float) -> np.ndarray:
+def mean_response(frequency_hz: np.ndarray, q: int, step_s: float) -> np.ndarray:
     """``|H(f)|^2`` of the mean of ``q`` consecutive steps of ``step_s`` (1 at zero frequency)."""
     x = np.pi * np.asarray(frequency_hz, dtype=float) * step_s
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -273,7 +273,7 @@ def choose_taper(rates: np.ndarray, step_s: float, noise_density: np.ndarray) ->
     coarse = rates[:n // q * q].reshape(n // q, q, 3).mean(axis=1)
     floor = motion_floor(len(coarse), q * step_s, noise_density)
     lines = rate_lines(coarse, floor)
-    lines = dataclasses.replace(lines, power=lines.power / _mean_response(lines.cycles / (n * step_s), q, step_s)[:, None])
+    lines = dataclasses.replace(lines, power=lines.power / mean_response(lines.cycles / (n * step_s), q, step_s)[:, None])
     leakage = leakage_variance(lines, floor, weights)
     density = np.asarray(noise_density, dtype=float) ** 2
     total = np.sum(density[:, None] * noise_factor[None, :] / (n * step_s) + leakage, axis=0)

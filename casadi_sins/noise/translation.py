@@ -27,7 +27,7 @@ import numpy as np
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..nav.navigation import compensated_increments
-from .taper import SLOWEST_CYCLES, motion_floor, rate_lines
+from .taper import SLOWEST_CYCLES, mean_response, motion_floor, rate_lines
 
 #: Block of the specific force (s): lines up to 1 Hz (periods down to 2 s) are told apart.
 BLOCK_S = 0.5
@@ -38,6 +38,9 @@ PERIODS_S = (2.0, 60.0)
 #: long recording would find a noise model a few per cent low significant).
 MOTION_SIGNIFICANCE = 8.0
 MOTION_RELEVANCE = 1.25
+#: A line of the base's acceleration smaller than this (m/s^2, 10 ug) moves the base by micrometres per second at
+#: these periods: it leaves less than 0.05 ug in a static's tilt, and does not count.
+SMALLEST_LINE = 10e-6 * 9.80665
 
 
 @dataclasses.dataclass(frozen=True)
@@ -47,6 +50,8 @@ class MotionLine:
     segment: int
     frequency_hz: float
     acceleration: float  # amplitude, m/s^2 (largest body axis)
+    vertical: float = 0.0  # amplitude along gravity, m/s^2 (heave)
+    horizontal: float = 0.0  # amplitude across it, m/s^2 (surge, sway)
 
     @property
     def period_s(self) -> float:
@@ -87,9 +92,16 @@ class LinearMotion:
         """Whether the base moves linearly."""
         return self.significance > MOTION_SIGNIFICANCE and self.excess > MOTION_RELEVANCE and bool(self.lines)
 
-    def bands(self, margin_hz: float) -> list[tuple[float, float]]:
-        """:func:`motion_bands` of the lines."""
-        return motion_bands([line.frequency_hz for line in self.lines], margin_hz)
+    def bands(self, margin_hz: float, join_hz: float = 0.0) -> list[tuple[float, float, str]]:
+        """:func:`motion_bands` of the lines, each with the ENU axes its lines move (``"U"`` for heave, ``"EN"``
+        across gravity: the heading within a segment is not known here)."""
+        out = []
+        for low, high in motion_bands([line.frequency_hz for line in self.lines], margin_hz, join_hz):
+            inside = [line for line in self.lines if low <= line.frequency_hz <= high]
+            axes = ("EN" if any(line.horizontal > SMALLEST_LINE for line in inside) else "") + (
+                "U" if any(line.vertical > SMALLEST_LINE for line in inside) else "")
+            out.append((low, high, axes or "ENU"))
+        return out
 
     def describe(self) -> str | None:
         """One sentence about the base's linear motion (``None`` when it does not move)."""
@@ -105,11 +117,12 @@ class LinearMotion:
                 f"accelerometer noise)")
 
 
-def motion_bands(frequencies, margin_hz: float) -> list[tuple[float, float]]:
-    """Frequency bands (Hz) that cover ``frequencies`` with ``margin_hz`` on either side, overlapping ones merged."""
+def motion_bands(frequencies, margin_hz: float, join_hz: float = 0.0) -> list[tuple[float, float]]:
+    """Frequency bands (Hz) that cover ``frequencies`` with ``margin_hz`` on either side, bands that overlap or lie
+    within ``join_hz`` of each other merged."""
     bands: list[list[float]] = []
     for f in sorted(frequencies):
-        if bands and f - margin_hz <= bands[-1][1]:
+        if bands and f - margin_hz <= bands[-1][1] + join_hz:
             bands[-1][1] = f + margin_hz
         else:
             bands.append([f - margin_hz, f + margin_hz])
@@ -165,15 +178,20 @@ def linear_motion(rec: Recording, params, noise: SensorNoise, increments: dict |
         power += float(np.sum(spectrum[band] / noise_bin[None, :]))
         expected += 3.0 * band.sum()
         variance += 3.0 * band.sum() * (1.0 + 2.0 / 9.0)  # a Hann spectrum's neighbouring bins correlate
-        segments.append((seg.number, accel, duration))
+        force = dv.sum(axis=0)
+        segments.append((seg.number, accel, duration, force / np.linalg.norm(force)))  # up, in body axes
     if expected == 0.0:
         return LinearMotion(0.0, 1.0, [])
     motion = LinearMotion((power - expected) / np.sqrt(variance), power / expected, [])
     if motion.significance > MOTION_SIGNIFICANCE and motion.excess > MOTION_RELEVANCE:
         density = np.sqrt(white * step)
-        for number, accel, duration in segments:
+        for number, accel, duration, up in segments:
             found = rate_lines(accel, motion_floor(len(accel), step, density))
-            for f, p in zip(found.cycles, found.power):
-                if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0]:
-                    motion.lines.append(MotionLine(number, f / duration, float(np.sqrt(2.0 * np.max(p)))))
+            for f, p, c, s in zip(found.cycles, found.power, found.cosine, found.sine):
+                kept = np.sqrt(mean_response(np.array([f / duration]), block, rec.dt)[0])  # what the block's mean kept
+                size = float(np.sqrt(2.0 * np.max(p))) / kept
+                if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0] and size > SMALLEST_LINE:
+                    vertical = float(np.hypot(c @ up, s @ up)) / kept
+                    horizontal = float(np.hypot(np.linalg.norm(c - (c @ up) * up), np.linalg.norm(s - (s @ up) * up)))
+                    motion.lines.append(MotionLine(number, f / duration, size, vertical, horizontal / kept))
     return motion

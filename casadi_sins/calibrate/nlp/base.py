@@ -9,7 +9,7 @@ base as nuisance variables, estimated with the parameters and projected out of t
 * per ENU axis and band of the motion ``[f_c - W, f_c + W]``, the band's signals over the recording:
   the first Slepian sequences of half-bandwidth ``W`` over the recording's time (:func:`slepians`,
   ``2 W T +`` :data:`EXTRA_SEQUENCES` of them: any signal of the band, a line anywhere in it included,
-  lies in their span to 1e-4 of its size), times ``cos`` and ``sin`` of ``2 pi f_c t``, read at the
+  lies in their span to 2e-5 of its size), times ``cos`` and ``sin`` of ``2 pi f_c t``, read at the
   velocity observations.
 
 A bounded motion at those periods then leaves no trace in the parameters (a plain fit of the
@@ -28,9 +28,10 @@ from ...noise.observations import ObservationKind
 
 #: The nuisance variables' unit (m/s): mm/s.
 NUISANCE_UNIT = 1e-3
-#: Slepian sequences per band beyond ``2 W T``: then a line anywhere in the band lies in their span to
-#: 1e-4 of its size or better (a line of 0.1 m/s leaves 10 um/s, far below the velocity noise).
-EXTRA_SEQUENCES = 6
+#: Slepian sequences per band beyond ``2 W T``: then a line anywhere in a band of a few of the recording's
+#: frequency bins lies in their span to 2e-5 of its size (a line of 0.15 m/s leaves 3 um/s, far below the
+#: velocity noise), at the edge of a band of 25 bins to 3e-4 (6 more instead of 8 left 3e-3).
+EXTRA_SEQUENCES = 8
 #: Grid of the Slepian sequences over the recording (s), interpolated at the observations.
 SEQUENCE_STEP_S = 0.5
 
@@ -82,10 +83,11 @@ class BaseVelocity:
         return self.matrix.shape[1]
 
 
-def base_velocity(observations, plans, bands: list[tuple[float, float]]) -> BaseVelocity:
+def base_velocity(observations, plans, bands: list[tuple[float, float, str]]) -> BaseVelocity:
     """The nuisance variables of the base's velocity for a graph's velocity observations (module docstring):
     ``observations`` its :class:`noise.observations.ObservationTable`, ``plans`` its groups'
-    :class:`calibrate.steps.GroupSteps`, ``bands`` the motion's frequency bands (Hz)."""
+    :class:`calibrate.steps.GroupSteps`, ``bands`` the motion's frequency bands (Hz) with the ENU axes each moves
+    (``"U"``, ``"EN"`` or ``"ENU"``)."""
     rows = observations.n_rows
     columns, names, all_rows, all_times = [], [], [], []
     for plan in plans:
@@ -100,9 +102,9 @@ def base_velocity(observations, plans, bands: list[tuple[float, float]]) -> Base
         all_times.append(plan.observed_time)
     first, times = np.concatenate(all_rows), np.concatenate(all_times)
     span = (float(min(p.start_time for p in plans)), float(times.max()))
-    for low, high in bands:
+    for low, high, axes in bands:
         basis = band_basis(times, span, (low, high))
-        for axis, label in enumerate("ENU"):
+        for axis, label in ((a, label) for a, label in enumerate("ENU") if label in axes):
             block = np.zeros((rows, basis.shape[1]))
             block[first + axis] = basis
             columns += list(block.T)

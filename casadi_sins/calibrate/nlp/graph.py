@@ -200,12 +200,12 @@ def _group_observations(plan: GroupSteps, first_row: int) -> list[Observation]:
 def build_graph(rec: Recording, reference: np.ndarray, observe_s: float = 1.0,
                 rotation_step_s: float = ROTATION_STEP_S, static_step_s: float | None = None,
                 names: tuple[str, ...] = NAMES, tapers: dict[int, float] | None = None,
-                base_bands: list[tuple[float, float]] | None = None, referenced=frozenset()) -> ResidualGraph:
+                base_bands: list[tuple[float, float, str]] | None = None, referenced=frozenset()) -> ResidualGraph:
     """The NLP of a recording around ``reference`` parameters (ordered like ``names``: the 21, then any
     extra groups of the registry): its shape's graph (built once per shape) and the recording's data.
     ``tapers``: static segment -> the time-half-bandwidth of its tapered gyro mean (:mod:`noise.taper`);
-    ``base_bands``: the frequency bands (Hz) of a base's linear motion, whose velocity becomes nuisance
-    variables (:mod:`.base`); ``referenced``: the tapered segments whose mean reads the gyros' attitude
+    ``base_bands``: the frequency bands (Hz) of a base's linear motion and the ENU axes each moves, whose velocity
+    becomes nuisance variables (:mod:`.base`); ``referenced``: the tapered segments whose mean reads the gyros' attitude
     against the recording's attitude reference (:attr:`data.recording.Recording.reference`)."""
     t0 = time.perf_counter()
     names = tuple(names)

@@ -136,12 +136,21 @@ class WeightedLeastSquares:
         self.graph, self.weights = graph, weights
         self.scale = 1.0 / weights.shape[0]  # mean square: the tolerance does not depend on the recording's length
         self._weighted = (None, None)
+        self._base_columns = None
 
     def _linear(self, z: np.ndarray):
-        """``(W r, W J)`` at ``z``, one Jacobian evaluation per point."""
+        """``(W r, W J)`` at ``z``, one Jacobian evaluation per point (the base's velocity columns, constant, weighed
+        once)."""
         lin = self.graph.linearise(z)
         if self._weighted[0] is not lin:
-            self._weighted = (lin, (self.weights @ lin.r, self.weights @ lin.jac))
+            if self.graph.base is None:
+                weighted_jac = self.weights @ lin.jac
+            else:
+                n = self.graph.shape.n_variables
+                if self._base_columns is None:
+                    self._base_columns = self.weights @ lin.jac[:, n:]
+                weighted_jac = np.hstack([self.weights @ lin.jac[:, :n], self._base_columns])
+            self._weighted = (lin, (self.weights @ lin.r, weighted_jac))
         return self._weighted[1]
 
     def cost(self, z: np.ndarray) -> list:
@@ -184,8 +193,9 @@ class WeightedLeastSquares:
         return {"x": x, "f": cost(x)}, opts, keep
 
 
-#: Ipopt stops when the objective changes less than this (relative) over two iterations; on a moving base more
-#: (:data:`MOVING_OBJECTIVE_CHANGE`): the tapered gyro means' weights raise the objective's round-off to 1e-9.
+#: Ipopt stops when the objective changes less than this (relative) over two iterations; on a moving base when it
+#: changes less than :data:`MOVING_OBJECTIVE_CHANGE` once: the tapered gyro means' weights raise the objective's
+#: round-off to 1e-9, and the generalised least squares after Ipopt takes its last step.
 OBJECTIVE_CHANGE = 1e-12
 MOVING_OBJECTIVE_CHANGE = 1e-8
 
@@ -212,7 +222,8 @@ def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, toleran
     # weights the gradient's round-off floor can exceed any fixed tolerance although Gauss-Newton has
     # converged.
     opts.update({"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
-                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": objective_change, "ipopt.acceptable_iter": 2,
+                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": objective_change,
+                 "ipopt.acceptable_iter": 2 if objective_change == OBJECTIVE_CHANGE else 1,
                  "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"})
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
     with interruptions() as interrupted:

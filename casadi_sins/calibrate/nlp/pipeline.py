@@ -37,6 +37,7 @@ from ..limits import SCHEDULE_REMEDY, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from ..wander import describe, natural_size, record, with_wander
+from .base import EXTRA_SEQUENCES
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
 from .evidence import candidate_groups, evidence_warning, group_evidence, is_21
 from .gls import Fit, fit_graph, generalised_least_squares
@@ -179,8 +180,8 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     if linear:
         bands = base_bands(rec, noise_plan)
         message = (f"{linear}: the base's velocity is estimated with the parameters, free within "
-                   f"{', '.join(f'{low:.3g}-{high:.3g} Hz' for low, high in bands)} and constant per group (the "
-                   "velocity's information in those bands is given up)")
+                   f"{', '.join(f'{low:.3g}-{high:.3g} Hz ({axes})' for low, high, axes in bands)} and constant per "
+                   "group (the velocity's information in those bands is given up)")
         run.warnings.append(message)
         run.say(message)
     return run
@@ -190,12 +191,14 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
 BASE_BAND_MARGIN = 2.0
 
 
-def base_bands(rec: Recording, noise_plan: NoisePlan) -> list[tuple[float, float]] | None:
-    """The frequency bands (Hz) left to the base's velocity on a moving base (``None`` on a still one): its lines
-    with :data:`BASE_BAND_MARGIN` frequency bins of the recording on either side."""
+def base_bands(rec: Recording, noise_plan: NoisePlan) -> list[tuple[float, float, str]] | None:
+    """The frequency bands (Hz) left to the base's velocity on a moving base, with the ENU axes each moves
+    (``None`` on a still one): its lines with :data:`BASE_BAND_MARGIN` frequency bins of the recording on either
+    side; bands closer than their signals reach beyond them (:data:`.base.EXTRA_SEQUENCES`) are one band."""
     if noise_plan.linear is None or not noise_plan.linear.moving:
         return None
-    return noise_plan.linear.bands(BASE_BAND_MARGIN / float(rec.time[-1] - rec.time[0] + rec.dt))
+    bin_hz = 1.0 / float(rec.time[-1] - rec.time[0] + rec.dt)
+    return noise_plan.linear.bands(BASE_BAND_MARGIN * bin_hz, EXTRA_SEQUENCES * bin_hz)
 
 
 def _observable_graph(run: _Run) -> ResidualGraph:

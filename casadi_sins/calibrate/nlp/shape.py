@@ -180,6 +180,18 @@ class _Chain:
         taken = ca.horzcat(*pieces)
         return taken if np.all(order == np.arange(len(order))) else taken[:, np.argsort(order).tolist()]
 
+    def weighted(self, rows, first: int, weights) -> ca.MX:
+        """``sum_k weights[k] states[rows, first + k]`` over consecutive steps: each block's columns times its share
+        of the weights (a product per block, not a slice per state)."""
+        count = weights.shape[0]
+        total = 0
+        for b in range(first // self.size, (first + count - 1) // self.size + 1):
+            low, high = max(first, b * self.size), min(first + count, (b + 1) * self.size)
+            padded = ca.vertcat(ca.DM.zeros(low - b * self.size, 1), weights[low - first:high - first],
+                                ca.DM.zeros((b + 1) * self.size - high, 1))
+            total = total + self.outputs[b] @ padded
+        return total[list(rows)]
+
 
 def _interleave(per_axis):
     """(3 K x nd), row ``3 k + a``, from three (nd x K) blocks (axis ``a``: direction, observation ``k``)."""
@@ -344,16 +356,15 @@ def _tapered_rows(chain: _Chain, layout: GroupLayout, fields: dict, rows_q, nd: 
             rows.append(gyro_r[3 * j:3 * j + 3])
             blocks.append(gyro_jac[3 * j:3 * j + 3, :] if gyro_jac is not None else None)
             continue
-        steps = list(range(first, first + count))
         c = coefficients[offset:offset + count]
         reference = references[3 * tapered:3 * tapered + 3]
         offset, tapered = offset + count, tapered + 1
-        q_mid, weighted = chain.take(range(4), [mid]), chain.take(range(4), steps) @ c
+        q_mid, weighted = chain.take(range(4), [mid]), chain.weighted(range(4), first, c)
         if rows_q is None:
             rows.append(_tapered_in_body(1)(q_mid, ca.DM.zeros(4, 1), weighted, ca.DM.zeros(4, 1), reference)[0])
             continue
         mid_tangents = ca.reshape(chain.take(rows_q, [mid]), 4, nd)  # rows 4 i + b
-        weighted_tangents = ca.reshape(chain.take(rows_q, steps) @ c, 4, nd)
+        weighted_tangents = ca.reshape(chain.weighted(rows_q, first, c), 4, nd)
         body, body_tangents = _tapered_in_body(nd)(q_mid, mid_tangents, weighted, weighted_tangents, reference)
         rows.append(body)
         blocks.append(body_tangents)

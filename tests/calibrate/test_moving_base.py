@@ -110,3 +110,15 @@ def test_an_attitude_reference_is_read_where_it_shows_slow_motion_and_left_where
     assert all(m.taper is not None for m in motions) and sum(m.uses_reference for m in motions) <= 2
     still = dataclasses.replace(rec, reference=np.zeros_like(rec.reference))
     assert not any(m.uses_reference for m in plan_noise(still, rough_parameters(still).values).motions)
+
+
+def test_the_report_names_the_base_motion(deck_nlp, deck_sim):
+    from casadi_sins.report.calibration import report_data, report_markdown
+
+    data = report_data(deck_nlp, deck_sim.recording)
+    linear = data["linear_base_motion"]
+    assert linear["moving"] and linear["lines"] and all(3.0 <= line["period_s"] <= 13.5 for line in linear["lines"])
+    assert all(m["tapered_mean"]["noise_factor"] < 3.0 for m in data["base_motion"] if m["significant"])
+    text = report_markdown(data)
+    assert "## Base motion" in text and "moved linearly" in text and "taper_nw" in text
+    assert data["distrusted"] == []

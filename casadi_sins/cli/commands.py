@@ -160,8 +160,9 @@ def cmd_calibrate(args) -> int:
         raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
                        + " | ".join(result.warnings))
     if result.distrust and not args.accept_distrusted:
-        raise CliError(f"{rec.label}: the calibration's own checks do not trust its result, no parameter table written: "
-                       + " | ".join(result.distrust) + " (--accept-distrusted writes it, marked, with exit 4)")
+        raise CliError(f"{rec.label}: the calibration's own checks do not trust its result, no parameter table "
+                       "written: " + " | ".join(result.distrust)
+                       + " (--accept-distrusted writes it, marked, with exit 4)")
     verdict = judge(result.parameters, sheet) if sheet else None
     files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome,
                                         distrusted=bool(result.distrust)).encode()}

@@ -65,7 +65,8 @@ def base_motion(rec: Recording, params, noise: SensorNoise, increments: dict | N
     period) and bounds what it adds to the variance of the segment's plain mean rate (``2 V / T^2``, the
     angle at both ends of a segment of ``T`` seconds).  Where the base sways, ``V`` itself is the
     variance of the angle less its straight line and the angle random walk in it: the amplitude
-    ``sqrt(2 V)`` of a sinusoid (the window statistic alone overstates it by up to ``sqrt 2``).  A segment that sways gets a tapered mean (:func:`sway_tapers`).
+    ``sqrt(2 V)`` of a sinusoid (the window statistic alone overstates it by up to ``sqrt 2``).  A segment
+    that sways gets a tapered mean (:func:`sway_tapers`).
     """
     model = noise.complete()
     out = []

@@ -273,7 +273,8 @@ def choose_taper(rates: np.ndarray, step_s: float, noise_density: np.ndarray) ->
     coarse = rates[:n // q * q].reshape(n // q, q, 3).mean(axis=1)
     floor = motion_floor(len(coarse), q * step_s, noise_density)
     lines = rate_lines(coarse, floor)
-    lines = dataclasses.replace(lines, power=lines.power / mean_response(lines.cycles / (n * step_s), q, step_s)[:, None])
+    kept = mean_response(lines.cycles / (n * step_s), q, step_s)
+    lines = dataclasses.replace(lines, power=lines.power / kept[:, None])
     leakage = leakage_variance(lines, floor, weights)
     density = np.asarray(noise_density, dtype=float) ** 2
     total = np.sum(density[:, None] * noise_factor[None, :] / (n * step_s) + leakage, axis=0)

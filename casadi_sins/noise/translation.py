@@ -190,7 +190,8 @@ def linear_motion(rec: Recording, params, noise: SensorNoise, increments: dict |
             for f, p, c, s in zip(found.cycles, found.power, found.cosine, found.sine):
                 kept = np.sqrt(mean_response(np.array([f / duration]), block, rec.dt)[0])  # what the block's mean kept
                 size = float(np.sqrt(2.0 * np.max(p))) / kept
-                if SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0] and size > SMALLEST_LINE:
+                in_band = SLOWEST_CYCLES <= f and duration / PERIODS_S[1] <= f <= duration / PERIODS_S[0]
+                if in_band and size > SMALLEST_LINE:
                     vertical = float(np.hypot(c @ up, s @ up)) / kept
                     horizontal = float(np.hypot(np.linalg.norm(c - (c @ up) * up), np.linalg.norm(s - (s @ up) * up)))
                     motion.lines.append(MotionLine(number, f / duration, size, vertical, horizontal / kept))

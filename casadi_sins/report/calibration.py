@@ -163,9 +163,8 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "base_motion": [{"segment": m.segment, "amplitude_arcsec": m.amplitude_arcsec,
                          "period_s": None if not np.isfinite(m.period_s) else m.period_s,
                          "significant": m.significant,
-                         **({"tapered_mean": {"nw": m.taper.nw, "noise_factor": m.taper.noise_factor,
-                                              "leakage_deg_h": [float(x) for x in np.sqrt(m.taper.leakage) / DEG_PER_H]}}
-                            if m.taper is not None else {})} for m in motion],
+                         **({"tapered_mean": _taper_dict(m.taper)} if m.taper is not None else {})}
+                        for m in motion],
         "linear_base_motion": _linear_motion_dict(result.linear_motion),
     }
     if result.nlp is not None:
@@ -254,6 +253,12 @@ def report_markdown(data: dict) -> str:
                   "its window's time-half-bandwidth, its noise over a plain mean's, the sway's leakage bound):", "",
                   markdown_table(pd.DataFrame(moving), "%.3g")]
     return "\n".join(lines) + "\n"
+
+
+def _taper_dict(taper) -> dict:
+    """A tapered gyro mean (:class:`noise.taper.TaperChoice`) as plain data."""
+    return {"nw": taper.nw, "noise_factor": taper.noise_factor,
+            "leakage_deg_h": [float(x) for x in np.sqrt(taper.leakage) / DEG_PER_H]}
 
 
 def _taper_columns(taper: dict | None) -> dict:

@@ -126,7 +126,8 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         sheet = read_acceptance_sheet(options.tolerance) if options.tolerance else None
         result = calibrate(rec, solver=options.solver, noise=noise, model=options.model)
         if result.distrust:  # no table the calibration's own checks do not trust
-            raise CalibrationError("the calibration's own checks do not trust its result: " + " | ".join(result.distrust))
+            raise CalibrationError("the calibration's own checks do not trust its result: "
+                                   + " | ".join(result.distrust))
         verdict = judge(result.parameters, sheet) if sheet else None
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}

@@ -108,5 +108,6 @@ def base_velocity(observations, plans, bands: list[tuple[float, float, str]]) ->
             block = np.zeros((rows, basis.shape[1]))
             block[first + axis] = basis
             columns += list(block.T)
-            names += [f"base velocity in {low:.3g}-{high:.3g} Hz ({label}, signal {j + 1})" for j in range(basis.shape[1])]
+            names += [f"base velocity in {low:.3g}-{high:.3g} Hz ({label}, signal {j + 1})"
+                      for j in range(basis.shape[1])]
     return BaseVelocity(np.column_stack(columns) * NUISANCE_UNIT, names)

@@ -15,6 +15,9 @@ Conditions (the paper's schedule, 50 seeds each, same seeds in every condition):
   the calibrators are given it as a datasheet would (``--no-datasheet`` adds a run without it);
 * ``bias-instability-integer``: the same with integer pulses (the paper's pulse sizes);
 * ``sway``: the paper's noise on a base swaying 20-120 arcsec at 2-20 s periods (the ILS refuses).
+
+The accuracy on a swaying base against the still one (``results/noise-sway-ratio*``) is
+``benchmarks/bench_moving_base.py``'s.
 """
 
 from __future__ import annotations
@@ -107,14 +110,6 @@ def main():
     brief = table.groupby(["condition", "solver"], sort=False).agg(
         rms_over_sigma_min=("rms_over_sigma", "min"), rms_over_sigma_max=("rms_over_sigma", "max"),
         max_abs_z=("max_abs_z", "max"), beyond_4_5_sigma=("beyond_4_5_sigma", "sum"), runs=("runs", "min")).reset_index()
-    if {"paper", "sway"} <= set(table["condition"]):
-        still = table[(table["condition"] == "paper") & (table["solver"] == "nlp")].set_index("parameter")["rms_error"]
-        sway = table[(table["condition"] == "sway") & (table["solver"] == "nlp")].set_index("parameter")["rms_error"]
-        ratio = (sway / still).rename("sway_over_still")
-        print("NLP accuracy on the swaying base over the still base, per parameter:")
-        print(ratio.round(2).to_string())
-        write_frame(ratio.reset_index(), f"{out}/noise-sway-ratio", "NLP RMS error on the swaying base over the still "
-                    "base (paper noise, same seeds)")
     write_frame(brief, f"{out}/noise-montecarlo-summary", "Per condition and solver: RMS/sigma over the 21 parameters "
                 "(target 0.8-1.25), largest |z|, runs beyond 4.5 sigma")
     print(brief.to_string(index=False, float_format=lambda x: f"{x:.3g}"))

@@ -66,6 +66,18 @@ def kang_ils(kang_sim):
 
 
 @pytest.fixture(scope="session")
+def deck_sim():
+    """The paper's experiment on a ship's deck (problems/kang2013-deck.toml: sway and heave/surge), seed 7."""
+    return simulate(load_problem(PROBLEMS / "kang2013-deck.toml"), seed=7)
+
+
+@pytest.fixture(scope="session")
+def deck_nlp(deck_sim):
+    """The NLP's calibration of :func:`deck_sim` (read-only)."""
+    return calibrate_nlp(deck_sim.recording)
+
+
+@pytest.fixture(scope="session")
 def peer_recording():
     """The PSINS 19-position recording."""
     return read_recording(PEER / "psins-19pos.toml")

@@ -21,6 +21,7 @@ from ..model.parameters import ParameterSet
 from .ils import calibrate_ils
 from .nlp.pipeline import calibrate_nlp
 from .result import CalibrationError, CalibrationResult, Check
+from .trust import implausible
 
 SOLVERS = ("nlp", "ils")
 
@@ -61,7 +62,9 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
     InputError
         When a static segment holds motion inside it (not only at an edge).
     CalibrationError
-        When the calibration cannot give a trustworthy table.
+        When the calibration cannot give a table.  A table its own checks do not trust is returned with the
+        reasons in ``result.distrust`` (:mod:`calibrate.trust`): the command line does not write it as a
+        parameter table unless told to.
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; choose one of {', '.join(SOLVERS)}")
@@ -78,6 +81,7 @@ def calibrate(rec: Recording, solver: str = "nlp", initial: ParameterSet | None 
         else:
             result = calibrate_ils(rec, initial=initial, progress=progress, **options)
     result.checks.append(rest_check(rec, rule))
+    result.distrust += implausible(result.parameters, result.initial)
     return result
 
 

@@ -18,6 +18,7 @@ from ..model.parameters import ParameterSet, natural_errors
 from ..noise.motion import SegmentMotion
 from ..noise.observations import ObservationTable
 from ..noise.raw import RawNoise
+from ..noise.translation import LinearMotion
 from ..noise.wander import SensorWander
 
 
@@ -143,6 +144,10 @@ class CalibrationResult:
         Factor applied to the covariance when the residuals exceed the noise model (1 otherwise).
     noise : NoiseReport
     base_motion : list of SegmentMotion
+    linear_motion : LinearMotion or None
+        The base's linear motion (a deck's heave and surge), when it was looked for.
+    distrust : list of str
+        Why the calibration's own checks do not trust the table (:mod:`calibrate.trust`); empty when they do.
     timings : dict
         Seconds per phase.
     nlp, ils : NlpDetails or IlsDetails or None
@@ -172,6 +177,8 @@ class CalibrationResult:
     nlp: NlpDetails | None = None
     ils: IlsDetails | None = None
     notes: list[str] = dataclasses.field(default_factory=list)
+    linear_motion: LinearMotion | None = None
+    distrust: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def x(self) -> np.ndarray:

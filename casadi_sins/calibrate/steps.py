@@ -17,10 +17,11 @@ from ..core.rotations import quat_to_dcm
 from ..data.recording import Recording
 from ..noise.kalman import GroupTrack
 from ..noise.observations import Observation
+from ..noise.taper import STEP_S
 
 #: Rotation step and static step on a swaying base (s).
 ROTATION_STEP_S = 0.04
-SWAY_STATIC_STEP_S = 0.1
+SWAY_STATIC_STEP_S = STEP_S
 
 
 @dataclasses.dataclass
@@ -116,9 +117,11 @@ def plan_steps(rec: Recording, group: int, observe_s: float = 1.0, rotation_step
 
 
 def group_track(plan: GroupSteps, observations: list[Observation], start_attitude: np.ndarray, quats: np.ndarray,
-                use_rotation_steps: bool, sway: dict | None = None) -> GroupTrack:
+                use_rotation_steps: bool, sway: dict | None = None, tapers: dict | None = None) -> GroupTrack:
     """The noise model's view of one group: its steps along the navigated attitude (quaternions at
-    every step end, ``(4, M)``), its observations, and the sway of its static segments."""
+    every step end, ``(4, M)``), its observations, the sway of its static segments, and the rate weights of
+    the segments whose gyro mean is tapered (``tapers``: segment -> weights over its steps,
+    :func:`noise.taper.rate_weights`)."""
     sway = sway or {}
     after = quat_to_dcm(quats.T)
     before = np.concatenate([start_attitude[None], after[:-1]])
@@ -131,9 +134,14 @@ def group_track(plan: GroupSteps, observations: list[Observation], start_attitud
         free[first_static] = False
     numbers = np.unique(plan.step_segment[plan.step_segment >= 0])
     durations = {int(s): float(plan.step_dt[plan.step_segment == s].sum()) for s in numbers}
-    return GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0, free, observations,
-                      durations, {s: sway[s] for s in durations if s in sway},
-                      {int(s): plan.middle_step(int(s)) for s in numbers})
+    track = GroupTrack(plan.start_time, plan.step_dt, attitude, seg_start, plan.step_segment >= 0, free, observations,
+                       durations, {s: sway[s] for s in durations if s in sway},
+                       {int(s): plan.middle_step(int(s)) for s in numbers})
+    for segment, weights in (tapers or {}).items():
+        steps = np.flatnonzero(plan.step_segment == segment)
+        if len(steps):
+            track.segment_taper[segment] = (steps, weights)
+    return track
 
 
 #: Static segments longer than this many observations are observed more sparsely (long files).

@@ -175,8 +175,13 @@ def cmd_calibrate(args) -> int:
     if args.strict and result.warnings:
         raise CliError(f"{rec.label}: --strict and {len(result.warnings)} warning(s), no parameter table written: "
                        + " | ".join(result.warnings))
+    if result.distrust and not args.accept_distrusted:
+        raise CliError(f"{rec.label}: the calibration's own checks do not trust its result, no parameter table "
+                       "written: " + " | ".join(result.distrust)
+                       + " (--accept-distrusted writes it, marked, with exit 4)")
     verdict = judge(result.parameters, sheet) if sheet else None
-    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome).encode()}
+    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome,
+                                        distrusted=bool(result.distrust)).encode()}
     table_sha256 = hashlib.sha256(files[Path(args.out)]).hexdigest()
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
@@ -205,7 +210,15 @@ def cmd_calibrate(args) -> int:
                  f"{seen}; 95 % upper bound {bound} at {wander.tau:.0f} s): the bias sigmas exclude it")
     for message in result.warnings:
         print(f"WARNING: {message}", file=sys.stderr)
-    return _verdict_status(verdict)
+    status = _verdict_status(verdict)
+    if result.distrust:
+        print(f"DISTRUSTED (written under --accept-distrusted, exit 4): {' | '.join(result.distrust)}", file=sys.stderr)
+        return DISTRUSTED_STATUS
+    return status
+
+
+#: Exit status of a table written under ``--accept-distrusted`` although the calibration's checks distrust it.
+DISTRUSTED_STATUS = 4
 
 
 def _verdict_status(verdict) -> int:

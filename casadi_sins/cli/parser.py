@@ -73,6 +73,9 @@ def build_parser() -> argparse.ArgumentParser:  # noqa: PLR0915 (one parser, eve
     p.add_argument("--noise", help="sensor datasheet (TOML, natural units: gyro_arw_deg_rth, accel_vrw_ug_rthz, "
                    "gyro_bias_instability_deg_h, gyro_bias_tau_s, ...); terms not given are measured in the data")
     p.add_argument("--strict", action="store_true", help="any warning is a failure: exit 2, no table")
+    p.add_argument("--accept-distrusted", action="store_true",
+                   help="write a table the calibration's own checks do not trust (by default: exit 2, no table), "
+                   "marked: a trust column 'distrusted' in the table, the reasons in the report, exit 4")
     p.add_argument("--model", default=None, choices=["21", "extended", "auto"],
                    help="parameters: the paper's 21; extended: also every extra group (accelerometer "
                    "quadratic and cross-quadratic terms, lever arms, gyro/accel time offset, gyro g-sensitivity and "

@@ -78,6 +78,42 @@ def rotation_vector(dcm) -> np.ndarray:
     return 2.0 * np.arctan2(norm, q[0]) * q[1:] / norm
 
 
+#: North-east-down to east-north-up (a permutation and a sign: its own inverse).
+NED_TO_ENU = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+def euler_to_enu(angles) -> np.ndarray:
+    """Attitude matrices in ENU, ``(..., 3, 3)``, of roll, pitch, heading ``(..., 3)`` (rad): Z-Y-X Euler angles
+    of a body (x forward, y right, z down) from north-east-down, ``C^ENU = T Rz(heading) Ry(pitch) Rx(roll)``."""
+    angles = np.asarray(angles, dtype=float)
+    roll, pitch, heading = angles[..., 0], angles[..., 1], angles[..., 2]
+    cr, sr, cp, sp, ch, sh = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(heading), np.sin(heading)
+    ned = np.stack([np.stack([ch * cp, ch * sp * sr - sh * cr, ch * sp * cr + sh * sr], -1),
+                    np.stack([sh * cp, sh * sp * sr + ch * cr, sh * sp * cr - ch * sr], -1),
+                    np.stack([-sp, cp * sr, cp * cr], -1)], -2)
+    return NED_TO_ENU @ ned
+
+
+def enu_to_euler(dcm) -> np.ndarray:
+    """Roll, pitch, heading ``(..., 3)`` (rad) of attitude matrices in ENU: the inverse of :func:`euler_to_enu`."""
+    ned = NED_TO_ENU @ np.asarray(dcm, dtype=float)
+    roll = np.arctan2(ned[..., 2, 1], ned[..., 2, 2])
+    pitch = -np.arcsin(np.clip(ned[..., 2, 0], -1.0, 1.0))
+    heading = np.arctan2(ned[..., 1, 0], ned[..., 0, 0])
+    return np.stack([roll, pitch, heading], -1)
+
+
+def small_rotations(dcm, reference) -> np.ndarray:
+    """Rotation vectors ``(..., 3)`` of ``dcm @ reference^T`` (rotations within about 90 deg): the vee of the
+    antisymmetric part, stretched by ``asin``."""
+    relative = np.asarray(dcm, dtype=float) @ np.swapaxes(np.asarray(reference, dtype=float), -1, -2)
+    vee = 0.5 * np.stack([relative[..., 2, 1] - relative[..., 1, 2], relative[..., 0, 2] - relative[..., 2, 0],
+                          relative[..., 1, 0] - relative[..., 0, 1]], -1)
+    size = np.linalg.norm(vee, axis=-1, keepdims=True)
+    stretch = np.where(size > 0, np.arcsin(np.minimum(size, 1.0)) / np.where(size > 0, size, 1.0), 1.0)
+    return vee * stretch
+
+
 # --------------------------------------------------------------------------- quaternions in CasADi
 def quat_multiply_expr(a, b):
     """Hamilton product ``a * b`` of quaternions (w, x, y, z)."""

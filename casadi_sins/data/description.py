@@ -42,7 +42,7 @@ from ..core.files import write_files
 from ..core.toml import array_table_lines, read_toml_text
 from .conditions import TEMPERATURE_RANGE_C, parse_conditions
 from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
-from .samples import read_samples, samples_writer
+from .samples import REFERENCE_COLUMNS, read_samples, samples_writer
 
 
 #: The longest recording name (it becomes file names and report titles).
@@ -62,11 +62,14 @@ def read_recording(path: str | Path) -> Recording:
     path = Path(path)
     head = read_description(path)
     data_path = path.parent / head["data"]
-    time, pulses, temperature = read_samples(data_path, head["rate_hz"], with_temperature=True)
+    time, pulses, temperature, reference = read_samples(data_path, head["rate_hz"], with_temperature=True,
+                                                        with_reference=True)
     _check_temperature(temperature, data_path)
+    _check_reference(reference, data_path)
     rec = Recording(name=head["name"], site=head["site"], rate_hz=head["rate_hz"], segments=head["segments"],
                     time=time, gyro=pulses[:, :3], accel=pulses[:, 3:], source=path, warnings=head["warnings"],
-                    conditions=head["conditions"], temperature=temperature)
+                    conditions=head["conditions"], temperature=temperature,
+                    reference=None if reference is None else np.radians(reference))
     rate_warning = check_rate(time, head["rate_hz"], data_path)
     if rate_warning:
         rec.warnings.append(rate_warning)
@@ -111,6 +114,17 @@ def read_description(path: str | Path, require_segments: bool = True) -> dict:
     conditions, notes = parse_conditions(doc.get("conditions"), path)
     return {"name": name, "data": data_name, "site": site, "rate_hz": rate_hz, "segments": segments,
             "conditions": conditions, "warnings": notes}
+
+
+def _check_reference(reference, data_path) -> None:
+    """Reference attitude angles within their ranges: roll and heading within +/-360 deg, pitch within +/-90 deg."""
+    if reference is None:
+        return
+    for j, (name, limit) in enumerate(zip(REFERENCE_COLUMNS, (360.0, 90.0, 360.0))):
+        beyond = np.flatnonzero(np.abs(reference[:, j]) > limit)
+        if len(beyond):
+            raise InputError(data_path, f"{name} {reference[beyond[0], j]:g} is beyond +/-{limit:g} deg",
+                             line=int(beyond[0]) + 2)
 
 
 def _check_temperature(temperature, data_path) -> None:

@@ -92,6 +92,12 @@ class Deviations:
     first-order Gauss-Markov process per axis (steady-state 1 sigma, correlation time).  Sway turns
     the whole base about the unit's centre: per ENU axis ``sway_components`` sinusoids with
     amplitudes uniform in ``sway_amplitude_arcsec`` and periods log-uniform in ``sway_period_s``.
+    Linear motion of the base (a deck's heave and surge) carries it along: on each ENU axis named in
+    ``translation_axes``, ``translation_components`` sinusoids with amplitudes uniform in
+    ``translation_amplitude_m`` and periods log-uniform in ``translation_period_s``, scaled down where
+    their peak acceleration would exceed ``translation_peak_mg`` (0: no limit).  ``reference_attitude``
+    writes an attitude reference of the base (a master INS) into the recording's optional columns, with
+    white noise of ``reference_noise_arcsec`` per sample and angle.
     """
 
     start_attitude_deg: float = 0.4  # each start attitude angle off nominal by +/- this (random sign)
@@ -108,12 +114,24 @@ class Deviations:
     sway_amplitude_arcsec: tuple[float, float] = (0.0, 0.0)
     sway_period_s: tuple[float, float] = (2.0, 20.0)
     sway_components: int = 2
+    translation_amplitude_m: tuple[float, float] = (0.0, 0.0)
+    translation_period_s: tuple[float, float] = (3.0, 13.0)
+    translation_components: int = 1
+    translation_axes: str = "NU"  # surge (north) and heave (up)
+    translation_peak_mg: float = 0.0
+    reference_attitude: bool = False  # write the base's attitude as the recording's reference columns
+    reference_noise_arcsec: float = 0.0
     quantize: bool = False  # integer pulses, remainder carried
 
     @property
     def sways(self) -> bool:
         """Whether the base sways."""
         return max(self.sway_amplitude_arcsec) > 0.0
+
+    @property
+    def translates(self) -> bool:
+        """Whether the base moves linearly."""
+        return max(self.translation_amplitude_m) > 0.0 and bool(self.translation_axes)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -268,21 +286,25 @@ class _Reader:
         return values or None
 
     def deviation(self, key: str, value):
-        if key == "quantize":
+        if key in ("quantize", "reference_attitude"):
             if not isinstance(value, bool):
-                raise self.fail("[errors] quantize must be true or false")
+                raise self.fail(f"[errors] {key} must be true or false")
             return value
-        if key == "sway_components":
+        if key in ("sway_components", "translation_components"):
             count = self.number({key: value}, key, "errors")
             if count != int(count) or count < 1:
-                raise self.fail("[errors] sway_components must be a positive integer")
+                raise self.fail(f"[errors] {key} must be a positive integer")
             return int(count)
-        if key in ("sway_amplitude_arcsec", "sway_period_s"):
+        if key == "translation_axes":
+            if not isinstance(value, str) or set(value.upper()) - set("ENU") or len(set(value.upper())) != len(value):
+                raise self.fail(f"[errors] translation_axes must be letters of ENU, found {shown(value)}")
+            return value.upper()
+        if key in ("sway_amplitude_arcsec", "sway_period_s", "translation_amplitude_m", "translation_period_s"):
             pair = value if isinstance(value, list) else [value, value]
             if len(pair) != 2:
                 raise self.fail(f"[errors] {key} must be a number or [low, high]")
             low, high = (self.number({"v": v}, "v", f"errors {key}") for v in pair)
-            if not 0.0 <= low <= high or (key == "sway_period_s" and low <= 0.0):
+            if not 0.0 <= low <= high or (key.endswith("_period_s") and low <= 0.0):
                 raise self.fail(f"[errors] {key} must be 0 <= low <= high (periods > 0)")
             return (low, high)
         result = self.number({key: value}, key, "errors")

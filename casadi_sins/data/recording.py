@@ -90,6 +90,10 @@ class Recording:
     notes : list of str
         What was found or assumed in reading it, without doubt (a schedule found from the samples, when the
         description has no segments); doubts are ``warnings``.
+    reference : ndarray (N, 3) or None
+        The CSV's optional reference attitude (roll, pitch, heading, rad; Z-Y-X Euler angles from
+        north-east-down, :func:`core.rotations.euler_to_enu`): a master INS on the base, or a turntable's
+        encoders turned into the table top's attitude.  Only its changes within a static segment are used.
     """
 
     name: str
@@ -104,6 +108,7 @@ class Recording:
     conditions: Conditions = dataclasses.field(default_factory=Conditions)
     temperature: np.ndarray | None = None  # degC per sample, when the CSV has the column
     notes: list[str] = dataclasses.field(default_factory=list)  # what was found or assumed (a schedule found), no doubt
+    reference: np.ndarray | None = None  # (N, 3) roll, pitch, heading of an attitude reference, rad
 
     @property
     def dt(self) -> float:

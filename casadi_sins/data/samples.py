@@ -24,6 +24,9 @@ from .recording import COLUMNS, PULSE_COLUMNS, TIME_TOLERANCE
 
 #: The optional column of the unit's temperature, degC.
 TEMPERATURE_COLUMN = "temperature"
+#: The optional columns of an external attitude reference (a master INS on the base, a turntable's encoders turned
+#: into the table top's attitude): roll, pitch, heading in degrees, Z-Y-X Euler angles from north-east-down.
+REFERENCE_COLUMNS = ("ref_roll_deg", "ref_pitch_deg", "ref_heading_deg")
 
 #: More columns than this is not a CSV of samples (the format has 7; extra columns are allowed).
 MAX_COLUMNS = 1000
@@ -39,10 +42,13 @@ MAX_PULSE = 2.0**53
 DATA_FILE = "data file (the CSV of samples that 'data' must name)"
 
 
-def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False) -> tuple:
+def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False, with_reference: bool = False
+                 ) -> tuple:
     """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
 
-    With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one.
+    With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one; with
+    ``with_reference`` (and ``with_temperature``) a fourth: the reference attitude columns
+    (:data:`REFERENCE_COLUMNS`, (N, 3) deg), or None without them (all three, or none).
 
     The file is read block by block (:data:`BLOCK_BYTES`) and every block is checked before the next is
     read: exactly the header's number of fields in each row (a comma inside a number would shift the
@@ -61,13 +67,22 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     with _read_errors(data_path):
         columns = _header(data_path)
         wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
+        given = [c for c in REFERENCE_COLUMNS if c in columns]
+        if with_reference and given and len(given) < len(REFERENCE_COLUMNS):
+            raise InputError(data_path, f"the reference attitude needs all of {', '.join(REFERENCE_COLUMNS)}; found "
+                             f"only {', '.join(given)}", line=1)
+        reference = with_reference and len(given) == len(REFERENCE_COLUMNS)
+        wanted = wanted + (REFERENCE_COLUMNS if reference else ())
         values = _stream(data_path, columns, 1.0 / rate_hz, wanted)
     if len(values) < 2:
         raise InputError(data_path, "fewer than two samples")
     time, pulses = values[:, 0], values[:, 1:len(COLUMNS)]
     if not with_temperature:
         return time, pulses
-    return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
+    temperature = values[:, len(COLUMNS)].copy() if TEMPERATURE_COLUMN in wanted else None
+    if not with_reference:
+        return time, pulses, temperature
+    return time, pulses, temperature, (values[:, -len(REFERENCE_COLUMNS):].copy() if reference else None)
 
 
 def sample_blocks(data_path: Path, rate_hz: float):
@@ -299,9 +314,9 @@ CSV_CHUNK = 500_000
 
 
 def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: slice | None = None,
-                header: bool = True, temperature: np.ndarray | None = None) -> str:
+                header: bool = True, temperature: np.ndarray | None = None, reference: np.ndarray | None = None) -> str:
     """CSV text of samples; floats in shortest round-trip form, integral pulses as integers; the
-    ``temperature`` column last when given."""
+    ``temperature`` column and the reference attitude (:data:`REFERENCE_COLUMNS`, (N, 3) deg) last when given."""
     rows = rows or slice(None)
     frame = pd.DataFrame({"time": np.round(time[rows], 9)})
     for j, col in enumerate(PULSE_COLUMNS):
@@ -310,6 +325,9 @@ def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: sli
         frame[col] = whole[rows].astype(np.int64) if integral else whole[rows]
     if temperature is not None:
         frame[TEMPERATURE_COLUMN] = temperature[rows]
+    if reference is not None:
+        for j, col in enumerate(REFERENCE_COLUMNS):
+            frame[col] = reference[rows, j]
     return frame.to_csv(index=False, header=header, lineterminator="\n")
 
 
@@ -319,7 +337,9 @@ def samples_writer(rec):
 
     def write(handle) -> None:
         for first in range(0, len(rec.time), CSV_CHUNK):
+            reference = None if rec.reference is None else np.degrees(rec.reference)
             handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                     header=first == 0, temperature=rec.temperature).encode("utf-8"))
+                                     header=first == 0, temperature=rec.temperature,
+                                     reference=reference).encode("utf-8"))
 
     return write

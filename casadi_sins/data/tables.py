@@ -85,18 +85,22 @@ def _rate_of(raw: pd.DataFrame) -> float:
 
 
 def table_text(params: ParameterSet, truth: ParameterSet | None = None, as_truth: bool = False,
-               acceptance: dict[str, str] | None = None) -> str:
+               acceptance: dict[str, str] | None = None, distrusted: bool = False) -> str:
     """The parameter table CSV (header ``parameter,unit,value,sigma``, more columns after).
 
     ``truth`` adds truth and error columns; ``as_truth`` gives a truth file (``parameter,unit,value``);
     ``acceptance`` (``{name: "pass" | "fail"}``, from a tolerance sheet) adds the column ``acceptance``
-    (empty for a parameter without a limit), marking the parameters that fail.
+    (empty for a parameter without a limit), marking the parameters that fail; ``distrusted`` adds the
+    column ``trust``, ``distrusted`` in every row (a table the calibration's checks do not trust, written
+    on request).
     """
     frame = params.to_frame(truth)
     if as_truth:
         frame = frame[["parameter", "unit", "value"]]
     elif acceptance is not None:
         frame["acceptance"] = [acceptance.get(n, "") for n in params.names]
+    if distrusted and not as_truth:
+        frame["trust"] = "distrusted"
     return frame.to_csv(index=False, na_rep="")  # shortest exact form of every float64: full precision
 
 

@@ -167,6 +167,8 @@ class _Rows:
         self.free = (free_so_far[at] - np.concatenate([[0], free_so_far[at[:-1]]])) > 0
         segments = [observations[i].segment for i in self.gyro]
         self.duration = np.array([track.segment_duration[s] for s in segments])
+        self.tapered = np.array([s in track.segment_taper for s in segments], dtype=bool)
+        self.quantization_weight = np.array([track.quantization_weight(s) for s in segments])
         self.sway = np.array([np.broadcast_to(track.segment_sway.get(s, 0.0), (3,)) for s in segments]).reshape(-1, 3)
         self.h_gyro = np.zeros((self.k, 3, 6))
         for i, s in zip(self.gyro, segments):
@@ -179,8 +181,9 @@ class _Rows:
         c = self.attitude
         r[self.velocity] = (c * noise.accel_quantization**2) @ np.swapaxes(c, 1, 2) + np.eye(3) * VELOCITY_FLOOR
         flags[self.velocity, 0], flags[self.velocity, 1] = 1.0, self.free
-        variance = (2.0 * noise.gyro_quantization**2 / self.duration[:, None] ** 2 + self.sway
-                    + noise.unmodelled_rate**2 + GYRO_FLOOR)
+        quantization = np.where(self.tapered[:, None], self.quantization_weight[:, None] * noise.gyro_quantization**2,
+                                2.0 * noise.gyro_quantization**2 / self.duration[:, None] ** 2)
+        variance = quantization + self.sway + noise.unmodelled_rate**2 + GYRO_FLOOR
         r[self.gyro] = variance[:, :, None] * np.eye(3)
         flags[self.gyro, 2] = 1.0
         return r, flags

@@ -17,7 +17,9 @@ When the fit shows errors outside the model (drift in static segments, misfit of
 mean and a white velocity error at every rotation represent them, with variances from the fit
 (:mod:`calibrate.nlp.likelihood`).
 A velocity observation is ``dv + C e_a`` (``e_a``: the accelerometers' pulse remainder), a static gyro
-mean ``a / T + (e_g,end - e_g,start) / T`` plus the base's sway (:mod:`noise.motion`).  The
+mean ``a / T + (e_g,end - e_g,start) / T`` plus the base's sway (:mod:`noise.motion`).  A tapered mean
+(:mod:`noise.taper`) weighs its steps: the gyro noise enters its angle ``a`` with the step's weight times
+``T``, and its middle attitude error is the weighted mean of the attitude errors after the steps.  The
 same gyro noise thus enters the gyro means *and* the velocity, through ``f x phi``, and the bias
 instability ties the whole recording together; both are in the model.
 
@@ -123,18 +125,19 @@ class NoiseSystem:
         """
         h, c, f = track.step_dt, track.attitude, self.f_cross
         h1, h2, h3 = (h[:, None, None] ** k / k for k in (1, 2, 3))
+        gain = track.gyro_gain[:, None, None]  # the gyro angle's share of the noise (a tapered mean's weight)
         c_d = c * np.asarray(gyro_variance, dtype=float)  # C D
         c_d_c = c_d @ np.swapaxes(c, 1, 2)
         f_c_d = f @ c_d
         q = np.zeros((len(h), layout.n, layout.n))
         q[:, PHI, PHI] = c_d_c * h1
-        q[:, PHI, ACC] = -c_d * h1
-        q[:, ACC, PHI] = -np.swapaxes(c_d, 1, 2) * h1
-        q[:, ACC, ACC] = np.diag(gyro_variance) * h1
+        q[:, PHI, ACC] = -c_d * h1 * gain
+        q[:, ACC, PHI] = -np.swapaxes(c_d, 1, 2) * h1 * gain
+        q[:, ACC, ACC] = np.diag(gyro_variance) * h1 * gain**2
         q[:, PHI, DV] = c_d_c @ f.T * h2
         q[:, DV, PHI] = f @ c_d_c * h2
-        q[:, ACC, DV] = -np.swapaxes(f_c_d, 1, 2) * h2
-        q[:, DV, ACC] = -f_c_d * h2
+        q[:, ACC, DV] = -np.swapaxes(f_c_d, 1, 2) * h2 * gain
+        q[:, DV, ACC] = -f_c_d * h2 * gain
         q[:, DV, DV] = f @ c_d_c @ f.T * h3 + (c * np.asarray(accel_variance, dtype=float)) @ np.swapaxes(c, 1, 2) * h1
         return q
 
@@ -166,7 +169,7 @@ class NoiseSystem:
         col[:, sl] = np.eye(3) * beta[:, None, None]
         if sensor == "gyro":
             col[:, PHI] = -c * gamma1[:, None, None]
-            col[:, ACC] = np.eye(3) * gamma1[:, None, None]
+            col[:, ACC] = np.eye(3) * (gamma1 * track.gyro_gain)[:, None, None]
             col[:, DV] = -(self.f_cross @ c) * gamma2[:, None, None]
         else:
             col[:, DV] = c * gamma1[:, None, None]

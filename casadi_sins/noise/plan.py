@@ -16,8 +16,9 @@ import numpy as np
 from ..core.units import ARW_UNIT, VRW_UNIT
 from ..data.recording import Recording
 from ..model.noise import ACCEL_VRW_FLOOR, GYRO_ARW_FLOOR, SensorNoise
-from .motion import SegmentMotion, base_motion
+from .motion import SegmentMotion, base_motion, static_increments
 from .raw import RawNoise, estimate_sensor_noise
+from .translation import LinearMotion, linear_motion
 
 #: The source of a counter's quantization: its integer pulses carry the remainder, one pulse / sqrt(12).
 COUNTER_SOURCE = "integer pulses (1 pulse / sqrt(12))"
@@ -33,6 +34,7 @@ class NoisePlan:
     source: dict[str, str]  # term -> "datasheet" | "raw data" | COUNTER_SOURCE | "fit" | "not modelled"
     motions: list[SegmentMotion]
     warnings: list[str] = dataclasses.field(default_factory=list)  # a datasheet the data contradict
+    linear: LinearMotion | None = None  # the base's linear motion (a deck's heave and surge)
 
     def free_terms(self) -> dict[str, list[str]]:
         """Terms the fit must set, by residual kind they show in most."""
@@ -41,7 +43,7 @@ class NoisePlan:
 
 
 def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None = None) -> NoisePlan:
-    """Raw-data noise estimate, merged with a datasheet; base motion."""
+    """Raw-data noise estimate, merged with a datasheet; base motion (sway and linear motion)."""
     raw = estimate_sensor_noise(rec, reference)
     given = given or SensorNoise()
     determined = raw.model()
@@ -66,8 +68,9 @@ def plan_noise(rec: Recording, reference: np.ndarray, given: SensorNoise | None 
                "accel_quantization": _quantization_source(given.accel_quantization, raw.counter.get("accel", False)),
                "gyro_bias_instability": "datasheet" if given.gyro_bias_instability is not None else "not modelled",
                "accel_bias_instability": "datasheet" if given.accel_bias_instability is not None else "not modelled"}
-    motions = base_motion(rec, reference, model)
-    return NoisePlan(raw, given, model, sources, motions, warnings)
+    increments = static_increments(rec, reference)
+    motions = base_motion(rec, reference, model, increments)
+    return NoisePlan(raw, given, model, sources, motions, warnings, linear_motion(rec, reference, model, increments))
 
 
 def _quantization_source(given_value, counter: bool) -> str:

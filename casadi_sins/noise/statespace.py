@@ -104,11 +104,30 @@ class GroupTrack:
     segment_duration: dict[int, float]  # static segment index -> duration (s)
     segment_sway: dict[int, np.ndarray]  # static segment index -> variance added to its mean rate, (rad/s)^2
     segment_mid_of: dict[int, int] = dataclasses.field(default_factory=dict)  # segment -> its middle step
+    # segment -> (its steps, the rate weights u of its tapered gyro mean, noise.taper.rate_weights)
+    segment_taper: dict[int, tuple[np.ndarray, np.ndarray]] = dataclasses.field(default_factory=dict)
 
     @property
     def segment_mid(self) -> set[int]:
-        """Steps whose end attitude a static segment's gyro mean uses."""
-        return set(self.segment_mid_of.values())
+        """Steps whose end attitude a plain gyro mean uses (a tapered mean weighs every step's instead)."""
+        return {step for segment, step in self.segment_mid_of.items() if segment not in self.segment_taper}
+
+    @property
+    def gyro_gain(self) -> np.ndarray:
+        """(M,) how each step's gyro noise enters the segment's gyro angle: 1, or in a tapered segment its rate
+        weight times the segment's length (the gyro mean reads the angle over the length)."""
+        gain = np.ones(len(self.step_dt))
+        for segment, (steps, weights) in self.segment_taper.items():
+            gain[steps] = weights * self.segment_duration[segment]
+        return gain
+
+    def quantization_weight(self, segment: int) -> float:
+        """What a pulse remainder's variance brings to a segment's gyro mean: ``2 / T^2`` (its ends), or the
+        sum of the squared coefficients of the tapered mean on the attitudes after its steps."""
+        if segment in self.segment_taper:
+            weights = self.segment_taper[segment][1]
+            return float(np.sum((weights - np.concatenate([weights[1:], [0.0]])) ** 2))
+        return 2.0 / self.segment_duration[segment] ** 2
 
     @property
     def observations_at(self) -> dict[int, list[Observation]]:

@@ -6,7 +6,9 @@ of the step they precede or follow:
 * at a static segment's first step the segment's gyro angle and unmodelled acceleration restart
   (``x <- D x``), the rotation's velocity error and the new unmodelled acceleration enter
   (``P <- D P D^T + P_add``);
-* after the segment's middle step its attitude error is kept (``x <- M x``);
+* after the segment's middle step its attitude error is kept (``x <- M x``); in a tapered segment
+  (:mod:`noise.taper`) the kept attitude error restarts at the segment's start and after every step gains
+  the step's weight times the attitude error (``x <- A_k x``, the weighted mean over the steps);
 
 so a step is ``x <- M Phi D x``, ``P <- M (Phi (D P D^T + P_add) Phi^T + Q) M^T``.  Steps without an
 observation are composed with the next observed one, and the Kalman filter (:mod:`noise.filter`)
@@ -40,6 +42,13 @@ def fold_covariance(track: GroupTrack, layout: Layout, phi: np.ndarray, q: np.nd
     middle = sorted(track.segment_mid)
     keep = _middle_copy(layout)
     q[middle] = keep @ q[middle] @ keep.T
+    if track.segment_taper:  # A q A^T, A = I + W E (E: the attitude error into the kept one)
+        steps, weights = _accumulations(track)
+        w = weights[:, None, None]
+        block = q[steps]
+        block[:, PM, :] += w * block[:, PHI, :]
+        block[:, :, PM] += w * block[:, :, PHI]
+        q[steps] = block
     return q
 
 
@@ -50,10 +59,22 @@ def fold_transition(track: GroupTrack, layout: Layout, phi: np.ndarray) -> np.nd
     restart[start, ACC] = 0.0
     if layout.unmodelled:
         restart[start, layout.ua] = 0.0
+    for steps, _ in track.segment_taper.values():  # a tapered segment's mean attitude error sums from its start
+        restart[steps[0], PM] = 0.0
     phi = phi * restart[:, None, :]
     middle = sorted(track.segment_mid)
     phi[middle] = _middle_copy(layout) @ phi[middle]
+    if track.segment_taper:  # A Phi, A = I + W E: the kept attitude error gains W times the attitude error
+        steps, weights = _accumulations(track)
+        phi[steps, PM, :] += weights[:, None, None] * phi[steps, PHI, :]
     return phi
+
+
+def _accumulations(track: GroupTrack) -> tuple[np.ndarray, np.ndarray]:
+    """The steps of the tapered segments and the weight ``W_k = u_k h_k`` with which the kept attitude error gains
+    the attitude error after each (``A_k = I + W_k E``)."""
+    steps = np.concatenate([s for s, _ in track.segment_taper.values()])
+    return steps, np.concatenate([w for _, w in track.segment_taper.values()]) * track.step_dt[steps]
 
 
 def _middle_copy(layout: Layout) -> np.ndarray:
@@ -94,17 +115,25 @@ def component_weights(system, noise: SensorNoise, layout: Layout) -> np.ndarray:
 def compose(phi: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One transition and covariance for consecutive steps (K, n, n), composed pairwise (``q`` may hold
     several covariances per step, (K, J, n, n))."""
-    while len(phi) > 1:
-        odd = len(phi) % 2
-        first_phi, first_q = phi[0:len(phi) - odd:2], q[0:len(q) - odd:2]
-        second_phi, second_q = phi[1::2], q[1::2]
+    phi, q = compose_batch(phi[None], q[None])
+    return phi[0], q[0]
+
+
+def compose_batch(phi: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`compose` of several runs of consecutive steps at once: ``phi`` (B, K, n, n), ``q`` (B, K, n, n) or
+    (B, K, J, n, n); returns (B, n, n) and (B, [J,] n, n)."""
+    while phi.shape[1] > 1:
+        k = phi.shape[1]
+        odd = k % 2
+        first_phi, first_q = phi[:, 0:k - odd:2], q[:, 0:k - odd:2]
+        second_phi, second_q = phi[:, 1::2], q[:, 1::2]
         new_phi = second_phi @ first_phi
-        turn = second_phi[:, None] if q.ndim == 4 else second_phi  # q per variance component: (K, J, n, n)
+        turn = second_phi[:, :, None] if q.ndim == 5 else second_phi  # q per variance component: (B, K, J, n, n)
         new_q = turn @ first_q @ np.swapaxes(turn, -1, -2) + second_q
         if odd:
-            new_phi, new_q = np.concatenate([new_phi, phi[-1:]]), np.concatenate([new_q, q[-1:]])
+            new_phi, new_q = np.concatenate([new_phi, phi[:, -1:]], axis=1), np.concatenate([new_q, q[:, -1:]], axis=1)
         phi, q = new_phi, new_q
-    return phi[0], q[0]
+    return phi[:, 0], q[:, 0]
 
 
 def observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout, components: bool = False):
@@ -121,11 +150,13 @@ def observed_steps(system, track: GroupTrack, noise: SensorNoise, layout: Layout
     ends = np.array(observed + ([m - 1] if m and (not observed or observed[-1] != m - 1) else []), dtype=int)
     starts = np.concatenate([[0], ends[:-1] + 1]).astype(int)
     phis = phi[ends]  # an observed step right after the previous one: nothing to compose
-    qs = units[0][ends] if weights is None else np.stack([unit[ends] for unit in units], axis=1)
-    for i in np.flatnonzero(ends > starts):
-        interval = slice(starts[i], ends[i] + 1)
-        q = units[0][interval] if weights is None else np.stack([unit[interval] for unit in units], axis=1)
-        phis[i], qs[i] = compose(phi[interval], q)
+    q_all = units[0] if weights is None else np.stack(units, axis=1)
+    qs = q_all[ends]
+    lengths = ends - starts + 1
+    for length in np.unique(lengths[lengths > 1]):  # runs of one length composed together
+        which = np.flatnonzero(lengths == length)
+        rows = starts[which][:, None] + np.arange(length)[None, :]
+        phis[which], qs[which] = compose_batch(phi[rows], q_all[rows])
     return list(ends), phis, qs, weights
 
 

@@ -149,6 +149,7 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
         "message": result.message,
         "warnings": list(result.warnings),
         "notes": list(result.notes),
+        "distrusted": list(result.distrust),
         "checks": checks,
         "variance_factor": float(result.variance_factor),
         "grade": grade_data(result.parameters, rec),
@@ -163,7 +164,10 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
                   "sources": dict(result.noise.sources), "bias_wander": _wander_dict(result.noise.bias_wander)},
         "base_motion": [{"segment": m.segment, "amplitude_arcsec": m.amplitude_arcsec,
                          "period_s": None if not np.isfinite(m.period_s) else m.period_s,
-                         "significant": m.significant} for m in motion],
+                         "significant": m.significant,
+                         **({"tapered_mean": _taper_dict(m.taper)} if m.taper is not None else {})}
+                        for m in motion],
+        "linear_base_motion": _linear_motion_dict(result.linear_motion),
     }
     if result.nlp is not None:
         nlp = result.nlp
@@ -211,6 +215,10 @@ def report_markdown(data: dict) -> str:
     lines.append(f"- wall time {data['wall_time_s']:.2f} s; sigma: {data['sigma_meaning']}")
     lines += _conditions_lines(data.get("conditions"))[:-1]
     lines += grade_markdown(data.get("grade"))
+    if data.get("distrusted"):
+        lines += ["", "## NOT TO BE TRUSTED", "", "The calibration's own checks do not trust this table; it was "
+                  "written only because --accept-distrusted asked for it (exit status 4):", ""]
+        lines += [f"- **{markdown_text(w)}**" for w in data["distrusted"]]
     lines += ["", "## Warnings", ""]
     lines += [f"- **{markdown_text(w)}**" for w in data["warnings"]] or ["- none"]
     if data.get("notes"):
@@ -242,10 +250,43 @@ def report_markdown(data: dict) -> str:
     if data["strongest_correlations"]:
         lines += ["", "## Most correlated parameters", "",
                   markdown_table(pd.DataFrame(data["strongest_correlations"]), "%+.3f")]
-    moving = [m for m in data["base_motion"] if m["significant"]]
+    moving = [{k: v for k, v in m.items() if k != "tapered_mean"} | _taper_columns(m.get("tapered_mean"))
+              for m in data["base_motion"] if m["significant"]]
+    linear = data.get("linear_base_motion") or {}
+    if moving or linear.get("moving"):
+        lines += ["", "## Base motion", ""]
+    if linear.get("moving"):
+        lines += [f"- {linear['description']}", "", markdown_table(pd.DataFrame(linear["lines"]), "%.3g"), ""]
     if moving:
-        lines += ["", "## Base motion", "", markdown_table(pd.DataFrame(moving), "%.3g")]
+        lines += ["Sway per static segment (angle amplitude and period; a swaying segment's gyro mean is tapered: "
+                  "its window's time-half-bandwidth, its noise over a plain mean's, the sway's leakage bound):", "",
+                  markdown_table(pd.DataFrame(moving), "%.3g")]
     return "\n".join(lines) + "\n"
+
+
+def _taper_dict(taper) -> dict:
+    """A tapered gyro mean (:class:`noise.taper.TaperChoice`) as plain data."""
+    return {"nw": taper.nw, "noise_factor": taper.noise_factor,
+            "leakage_deg_h": [float(x) for x in np.sqrt(taper.leakage) / DEG_PER_H]}
+
+
+def _taper_columns(taper: dict | None) -> dict:
+    """A tapered mean's columns of the sway table."""
+    if not taper:
+        return {}
+    return {"taper_nw": taper["nw"], "noise_factor": taper["noise_factor"],
+            "leakage_deg_h": max(taper["leakage_deg_h"])}
+
+
+def _linear_motion_dict(linear) -> dict | None:
+    """The base's linear motion (a deck's heave and surge) as plain data, ``None`` when it was not looked for."""
+    if linear is None:
+        return None
+    return {"moving": bool(linear.moving), "significance": float(linear.significance), "excess": float(linear.excess),
+            "description": linear.describe(),
+            "lines": [{"segment": line.segment, "period_s": line.period_s,
+                       "acceleration_mg": line.acceleration / 9.80665 * 1e3, "displacement_cm": line.displacement * 100,
+                       "velocity_mm_s": line.velocity * 1e3} for line in linear.lines] if linear.moving else []}
 
 
 def _conditions_lines(conditions: dict | None) -> list[str]:

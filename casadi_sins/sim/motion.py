@@ -12,7 +12,8 @@ next start position: one turn with the rotations' rate profile (``[timing] handl
 default), or a tumble by hand (``"minimum-jerk"``): slerps through :data:`HANDLING_WAYPOINTS` random
 attitudes, each leg with the minimum-jerk time law ``10 tau^3 - 15 tau^4 + 6 tau^5`` and a peak rate
 of :data:`HANDLING_PEAK_DEG_S` (higher when the legs need it to fit the gap), pauses at the waypoints
-filling the rest of the gap.  A swaying base turns the whole unit about its centre.
+filling the rest of the gap.  A swaying base turns the whole unit about its centre; a base with
+linear motion (a ship's deck: heave, surge) carries it along a bounded path.
 """
 
 from __future__ import annotations
@@ -242,11 +243,62 @@ class Sway:
         return s_dot + a * cross + b * np.cross(s, cross)
 
 
-def kinematics_function(pieces: list[MotionPiece], earth_rate: np.ndarray, gravity: float, sway: Sway | None = None):
+@dataclasses.dataclass(frozen=True)
+class Translation:
+    """Linear motion of the base (heave, surge): the unit's centre at ``p(t)`` (ENU, m) from its mean place.
+
+    ``p(t)`` is a sum of sinusoids per axis, bounded and without drift; the specific force gains the
+    base's acceleration and its Coriolis term, ``f^n = p'' + 2 w_ie x p' + g^n``.
+    """
+
+    amplitude: np.ndarray  # (3, M) m
+    omega: np.ndarray  # (3, M) rad/s
+    phase: np.ndarray  # (3, M) rad
+
+    @classmethod
+    def draw(cls, amplitude_m: tuple[float, float], period_s: tuple[float, float], components: int, axes: str,
+             peak_mps2: float, rng: np.random.Generator) -> "Translation":
+        """Random sinusoids on the ENU ``axes`` (letters of "ENU"): amplitudes uniform, periods log-uniform,
+        random phases; each axis scaled down to a peak acceleration of ``peak_mps2`` when it exceeds it
+        (0: no limit)."""
+        amp = rng.uniform(amplitude_m[0], amplitude_m[1], size=(3, components))
+        period = np.exp(rng.uniform(np.log(period_s[0]), np.log(period_s[1]), size=(3, components)))
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=(3, components))
+        omega = 2.0 * np.pi / period
+        amp *= np.array(["ENU"[k] in axes for k in range(3)], dtype=float)[:, None]
+        if peak_mps2 > 0.0:
+            peak = np.sum(amp * omega**2, axis=1, keepdims=True)
+            amp *= np.minimum(1.0, peak_mps2 / np.maximum(peak, 1e-300))
+        return cls(amp, omega, phase)
+
+    def _terms(self, t: np.ndarray, derivative: int) -> np.ndarray:
+        arg = np.asarray(t)[..., None, None] * self.omega + self.phase + derivative * np.pi / 2.0
+        return np.sum(self.amplitude * self.omega**derivative * np.sin(arg), axis=-1)
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """``p(t)``, shape ``t.shape + (3,)``."""
+        return self._terms(t, 0)
+
+    def velocity(self, t: np.ndarray) -> np.ndarray:
+        """``p'(t)``, shape ``t.shape + (3,)``."""
+        return self._terms(t, 1)
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """``p''(t)``, shape ``t.shape + (3,)``."""
+        return self._terms(t, 2)
+
+    def force(self, t: np.ndarray, earth_rate: np.ndarray) -> np.ndarray:
+        """What the motion adds to the specific force in n: ``p'' + 2 w_ie x p'``."""
+        return self.acceleration(t) + 2.0 * np.cross(earth_rate, self.velocity(t))
+
+
+def kinematics_function(pieces: list[MotionPiece], earth_rate: np.ndarray, gravity: float, sway: Sway | None = None,
+                        translation: Translation | None = None):
     """``kinematics(t) -> (C_b^n, w_b, w_dot_b, f_b)`` at any times (shape ``t.shape + (3, 3)`` / ``(3,)``).
 
     ``w_b`` is the body's inertial rate (table, sway and Earth rate), ``f_b`` the specific force at the
-    unit's centre (the base turns it about its centre), ``w_dot_b`` by a central difference of 10 us.
+    unit's centre (the base turns it about its centre and carries it along ``translation``), ``w_dot_b``
+    by a central difference of 10 us.
     """
     starts = np.array([p.t0 for p in pieces])
 
@@ -274,6 +326,8 @@ def kinematics_function(pieces: list[MotionPiece], earth_rate: np.ndarray, gravi
         step = 1e-5
         rate_dot = (attitude_and_rate(flat + step)[1] - attitude_and_rate(flat - step)[1]) / (2.0 * step)
         force = attitude[:, 2, :] * gravity  # C^T (0, 0, g)
+        if translation is not None:
+            force = force + np.einsum("nji,nj->ni", attitude, translation.force(flat, earth_rate))
         shape = t.shape
         return (attitude.reshape(shape + (3, 3)), rate.reshape(shape + (3,)), rate_dot.reshape(shape + (3,)),
                 force.reshape(shape + (3,)))

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.rotations import NED_TO_ENU, enu_to_euler
 from ..core.units import ARCSEC, ARW_UNIT, DEG_PER_H, UG
 from ..core.files import write_files
 from ..data.description import recording_files
@@ -30,7 +31,7 @@ from ..model.output import output_model
 from ..model.parameters import ParameterSet
 from ..model.registry import ACCEL_SCALE, GROUPS, GYRO_SCALE, N_PARAMS, groups_in
 from .hand import hand_increments, plan_hand
-from .motion import MotionPiece, Sway, kinematics_function, plan_motion
+from .motion import MotionPiece, Sway, Translation, kinematics_function, plan_motion
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(6)
 
@@ -46,6 +47,7 @@ class Simulation:
     rate_factors: list[float]
     seed: int | None
     sway: "Sway | None" = None
+    translation: "Translation | None" = None
 
 
 #: Sample pieces integrated at once by quadrature (bounds the memory of long recordings).
@@ -53,13 +55,14 @@ _QUADRATURE_CHUNK = 20000
 
 
 def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_rate: np.ndarray, gravity: float,
-                    sway: Sway | None = None, progress=None):
+                    sway: Sway | None = None, progress=None, translation: Translation | None = None):
     """Exact true ``(dtheta, dv)`` per sample interval ``[(k) dt, (k+1) dt]``, k = 0..n-1; ``progress(fraction)``,
     if given, after each piece of motion with the fraction of the experiment's time done.
 
-    Without sway a static piece is integrated in closed form; everything else by 6-point
+    Without base motion a static piece is integrated in closed form; everything else by 6-point
     Gauss-Legendre quadrature on each sample's part of the piece (the integrands are analytic
-    there): ``dtheta = int C^T (w_ie + w_sway) dt + u (alpha(b) - alpha(a))``, ``dv = int C^T g^n dt``.
+    there): ``dtheta = int C^T (w_ie + w_sway) dt + u (alpha(b) - alpha(a))``, ``dv = int C^T f^n dt``
+    with ``f^n = g^n`` plus the base's acceleration and Coriolis term (:class:`motion.Translation`).
     """
     edges = np.arange(n_samples + 1) * dt
     dtheta = np.zeros((n_samples, 3))
@@ -75,19 +78,23 @@ def true_increments(pieces: list[MotionPiece], n_samples: int, dt: float, earth_
         for first in range(0, len(a_all), _QUADRATURE_CHUNK):
             a, b = a_all[first:first + _QUADRATURE_CHUNK], b_all[first:first + _QUADRATURE_CHUNK]
             sample = np.clip(np.searchsorted(edges, 0.5 * (a + b)) - 1, 0, n_samples - 1)
-            if piece.axis is None and sway is None:
+            if piece.axis is None and sway is None and translation is None:
                 integral = (b - a)[:, None, None] * (piece.attitude.T @ references)[None]
             else:
                 nodes = a[:, None] + (b - a)[:, None] * (1.0 + _GAUSS_X[None, :]) / 2.0
                 weights = (b - a)[:, None] * _GAUSS_W[None, :] / 2.0
                 c_nodes = piece.attitude_at(nodes)  # (M, J, 3, 3)
-                if sway is None:
+                if sway is None and translation is None:
                     values = np.swapaxes(c_nodes, -1, -2) @ references  # (M, J, 3, 2)
                 else:
-                    c_nodes = sway.attitude(nodes) @ c_nodes
-                    rate = earth_rate + sway.rate(nodes)  # (M, J, 3)
-                    gravity_n = np.broadcast_to([0.0, 0.0, gravity], rate.shape)
-                    values = np.swapaxes(c_nodes, -1, -2) @ np.stack([rate, gravity_n], axis=-1)
+                    rate = np.broadcast_to(earth_rate, nodes.shape + (3,))
+                    force = np.broadcast_to([0.0, 0.0, gravity], nodes.shape + (3,))
+                    if sway is not None:
+                        c_nodes = sway.attitude(nodes) @ c_nodes
+                        rate = rate + sway.rate(nodes)  # (M, J, 3)
+                    if translation is not None:
+                        force = force + translation.force(nodes, earth_rate)
+                    values = np.swapaxes(c_nodes, -1, -2) @ np.stack([rate, force], axis=-1)
                 integral = np.einsum("mj,mjkl->mkl", weights, values)
             turned = (np.zeros((len(a), 3)) if piece.axis is None
                       else np.outer(piece.angle_at(b) - piece.angle_at(a), piece.axis))
@@ -144,7 +151,7 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     rng = np.random.default_rng(seed)
     dev = problem.deviations
     dt = 1.0 / problem.rate_hz
-    sway = None
+    sway = translation = None
     if problem.hand is not None:  # a session by hand (sim.hand)
         motion = plan_hand(problem, rng)
         n_samples = int(round(motion.pieces[-1].t1 * problem.rate_hz))
@@ -152,12 +159,17 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
         kinematics, starts, statics, factors = motion.kinematics, {1: motion.rest_attitudes[0]}, motion.rest_attitudes, []
     else:
         pieces, starts, statics, factors = plan_motion(problem, rng)
-        # drawn after the motion, so that adding sway leaves the other draws of a seed as they were
+        # drawn after the motion, so that adding sway or translation leaves the other draws of a seed as they were
         sway = (Sway.draw(tuple(a * ARCSEC for a in dev.sway_amplitude_arcsec), dev.sway_period_s,
                           dev.sway_components, rng) if dev.sways else None)
+        translation = (Translation.draw(dev.translation_amplitude_m, dev.translation_period_s,
+                                        dev.translation_components, dev.translation_axes,
+                                        dev.translation_peak_mg * 1e-3 * problem.site.g, rng)
+                       if dev.translates else None)
         n_samples = int(round(pieces[-1].t1 * problem.rate_hz))
-        dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, problem.site.g, sway, progress)
-        kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway)
+        dtheta, dv = true_increments(pieces, n_samples, dt, problem.site.earth_rate, problem.site.g, sway, progress,
+                                     translation)
+        kinematics = kinematics_function(pieces, problem.site.earth_rate, problem.site.g, sway, translation)
     truth = problem.truth
     # what the extra groups add to K_g dtheta and K_a dv in the output model
     gyro_extra, accel_extra = np.zeros_like(dtheta), np.zeros_like(dv)
@@ -179,11 +191,22 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     time = np.round(np.arange(1, n_samples + 1) * dt, 9)
     rec_name = name or (f"{problem.name}-seed{seed}" if seed is not None else problem.name)
     recording = Recording(name=rec_name, site=problem.site, rate_hz=problem.rate_hz, segments=problem.segments(),
-                          time=time, gyro=gyro, accel=accel)
+                          time=time, gyro=gyro, accel=accel,
+                          reference=base_reference(time, sway, dev.reference_noise_arcsec * ARCSEC, rng)
+                          if dev.reference_attitude else None)
     if sway is not None:  # the true start of a group on a swaying base
         first = {seg.group: seg.start for seg in reversed(recording.segments)}
         starts = {g: sway.attitude(np.array(first[g])) @ c for g, c in starts.items()}
-    return Simulation(recording, problem.truth, starts, statics, factors, seed, sway)
+    return Simulation(recording, problem.truth, starts, statics, factors, seed, sway, translation)
+
+
+def base_reference(time: np.ndarray, sway: Sway | None, noise_rad: float, rng: np.random.Generator) -> np.ndarray:
+    """An attitude reference on the base (a master INS): roll, pitch, heading (rad, N x 3) of the base at the
+    samples' ends, level and north at rest (:func:`core.rotations.euler_to_enu`), with white noise."""
+    attitude = np.broadcast_to(NED_TO_ENU, time.shape + (3, 3))
+    if sway is not None:
+        attitude = sway.attitude(time) @ NED_TO_ENU
+    return enu_to_euler(attitude) + rng.standard_normal((len(time), 3)) * noise_rad
 
 
 def simulation_files(sim: Simulation, out_dir: str | Path) -> dict:

@@ -36,7 +36,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..calibrate import calibrate
+from ..calibrate import CalibrationError, calibrate
 from ..core.errors import InputError
 from ..core.files import file_sha256, safe_stem, write_files
 from ..core.text import one_line, plural, spreadsheet_cell
@@ -133,6 +133,9 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         noise = read_datasheet(options.noise) if options.noise else None
         sheet = read_acceptance_sheet(options.tolerance) if options.tolerance else None
         result = calibrate(rec, solver=options.solver, noise=noise, model=options.model)
+        if result.distrust:  # no table the calibration's own checks do not trust
+            raise CalibrationError("the calibration's own checks do not trust its result: "
+                                   + " | ".join(result.distrust))
         verdict = judge(result.parameters, sheet) if sheet else None
         table = unit_table_path(out_dir, rec_path)
         files = {table: table_text(result.parameters, acceptance=verdict and verdict.outcome).encode()}

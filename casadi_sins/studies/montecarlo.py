@@ -72,7 +72,7 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
                          "unit": params.natural_units[i], "error": err[i], "sigma": sigma[i],
                          "first_iteration_error": first[i], "iterations": res.nit,
                          "wall_time": res.wall_time, "warnings": len(res.warnings), "chi_square": chi_square,
-                         "failed": ""})
+                         "distrusted": bool(res.distrust), "failed": ""})
     return rows
 
 

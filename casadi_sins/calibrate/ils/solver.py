@@ -151,7 +151,8 @@ def calibrate_ils(rec: Recording, initial: ParameterSet | None = None, max_itera
                                                   noise_plan.raw, None, dict(noise_plan.source), wander),
                              noise_plan.motions,
                              ils=IlsDetails(len(b), [eq.label for eq in equations], corrections, paper_sigma,
-                                            final.free_levels, final.curvature))
+                                            final.free_levels, final.curvature),
+                             linear_motion=noise_plan.linear)
 
 
 def _iteration_line(iteration: int, equations: int, x: np.ndarray, ratio: np.ndarray, factor: float) -> str:
@@ -250,14 +251,16 @@ def _check_applicable(rec: Recording, model, progress=None) -> None:
 
 
 def _base_motion_warning(noise_plan: NoisePlan, allow_base_motion: bool) -> list[str]:
-    """A swaying base: refuse (the coarse alignment needs a still one), or warn when allowed."""
-    motion = describe_motion(noise_plan.motions)
+    """A moving base (sway, or a deck's heave and surge): refuse (the coarse alignment and the velocity equations
+    need a still one), or warn when allowed."""
+    motion = "; ".join(m for m in (describe_motion(noise_plan.motions),
+                                   noise_plan.linear.describe() if noise_plan.linear is not None else None) if m)
     if not motion:
         return []
     if not allow_base_motion:
         raise CalibrationError(f"{motion}; the paper's method aligns each group on a still base and would take the "
-                               "sway for sensor errors: use the nlp solver, which estimates the start attitudes and "
-                               "models the sway")
+                               "base's motion for sensor errors: use the nlp solver, which estimates the start "
+                               "attitudes and takes the motion out (docs/moving-base.md)")
     return [f"{motion}: the paper's method assumes a still base; this table is unreliable"]
 
 

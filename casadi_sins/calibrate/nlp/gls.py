@@ -19,7 +19,7 @@ from ...noise.observations import ObservationKind
 from ...noise.plan import NoisePlan
 from ..result import CalibrationError
 from .graph import ResidualGraph
-from .ipopt import RANK_TOLERANCE, check_rank, quick_weights, solve_ipopt
+from .ipopt import OBJECTIVE_CHANGE, RANK_TOLERANCE, check_rank, quick_weights, solve_ipopt
 from .likelihood import estimate_free_terms
 
 #: A step this small (in sigma) is taken as the last: the next is smaller by a factor ~1e-4 x step
@@ -77,7 +77,8 @@ class Fit:
 
 def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_rotation_steps: bool, hessian: str,
               tolerance: float, max_iterations: int, progress, presolved: tuple | None = None,
-              x0: np.ndarray | None = None, relinearise: float = None) -> Fit:
+              x0: np.ndarray | None = None, relinearise: float = None,
+              objective_change: float = OBJECTIVE_CHANGE) -> Fit:
     """Stage 1 (Ipopt, quick weights; or ``presolved``, ``(z, stats)`` of :func:`.start.presolve`: Gauss-Newton
     under the noise model from a start fitted to the data) and stage 2 (generalised least squares under the noise
     model).
@@ -94,7 +95,7 @@ def fit_graph(rec: Recording, graph: ResidualGraph, noise_plan: NoisePlan, use_r
         z, stats = presolved
     else:
         weights = quick_weights(graph, noise_plan.model, rec.dt, use_rotation_steps, noise_plan.motions)
-        z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress, x0)
+        z, stats = solve_ipopt(graph, weights, hessian, tolerance, max_iterations, progress, x0, objective_change)
     if stats["return_status"] in ("User_Requested_Stop", "Interrupted_By_User"):
         raise KeyboardInterrupt  # Ctrl-C inside Ipopt: an interruption, not a failure to converge
     if not stats["success"] and stalled(stats):
@@ -208,7 +209,7 @@ def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: 
                                               noise_plan.motions), rec.site.g, rec.site.earth_rate)
         white = system.whiten(np.column_stack([r, jac]), model).columns
         rw, jw = white[:, 0], white[:, 1:]
-        u, s, vt = np.linalg.svd(jw, full_matrices=False)
+        u, s, vt = np.linalg.svd(jw, full_matrices=False) if graph.base is None else gram_svd(jw)
         check_rank(jw, graph.variable_names(), (u, s, vt))
         step = -vt.T @ ((u.T @ rw) / s)
         sigma = np.sqrt(np.sum((vt.T / s) ** 2, axis=1))
@@ -229,6 +230,16 @@ def generalised_least_squares(rec: Recording, graph: ResidualGraph, noise_plan: 
                  + ", ".join(f"{s:.3g}" for s in gls_steps) + " sigma")
     return Fit(z, model, rw, jw, r + jac @ step, jac, np.sum(u**2, axis=1), u, (vt.T / s**2) @ vt, gls_steps,
                rotation_step_ratio(graph, rw, use_rotation_steps), use_rotation_steps, system)
+
+
+def gram_svd(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The thin SVD ``(u, s, vt)`` of a tall matrix from the eigenvectors of its Gram matrix: several times faster
+    than LAPACK's for the hundreds of columns a moving base's velocity adds, and within 1e-8 of it for the
+    condition numbers of a calibration (1e5); singular values below 1e-7 of the largest are found as such."""
+    w, v = np.linalg.eigh(a.T @ a)
+    w, v = w[::-1], v[:, ::-1]
+    s = np.sqrt(np.clip(w, 0.0, None))
+    return a @ v / np.where(s > 0.0, s, 1.0), s, v.T
 
 
 def rotation_step_ratio(graph: ResidualGraph, rw: np.ndarray, use_rotation_steps: bool) -> float:

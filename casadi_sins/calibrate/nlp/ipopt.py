@@ -63,9 +63,10 @@ def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotat
 
     Consecutive velocity observations of a group are differenced and divided by the random walk over
     the samples between them (pitfall 7); a difference across a rotation is dropped when the steps are
-    not used.  Gyro means are divided by the white gyro noise of a segment and its sway.
+    not used.  Gyro means are divided by the white gyro noise of a segment (a tapered mean's: its weights'
+    share, :mod:`noise.taper`) and its sway.
     """
-    sway = {m.segment: m.gyro_mean_variance for m in motions}
+    sway = {m.segment: m.added_variance for m in motions}
     model = noise.complete()
     vrw = max(float(np.mean(model.accel_vrw)), ACCEL_VRW_FLOOR)
     arw = max(float(np.mean(model.gyro_arw)), GYRO_ARW_FLOOR)
@@ -87,8 +88,10 @@ def quick_weights(graph: ResidualGraph, noise: SensorNoise, dt: float, use_rotat
     for obs in (o for o in observations if o.kind == ObservationKind.GYRO_MEAN):
         i, seg = obs.row, obs.segment
         plan = next(p for p in graph.groups if p.group == obs.group)
-        duration = float(plan.step_dt[plan.step_segment == seg].sum())
-        variance = arw**2 / duration + sway.get(seg, np.zeros(3))
+        step_dt = plan.step_dt[plan.step_segment == seg]
+        white = (arw**2 * float(np.sum(graph.tapers[seg] ** 2 * step_dt)) if seg in graph.tapers
+                 else arw**2 / float(step_dt.sum()))
+        variance = white + sway.get(seg, np.zeros(3))
         for axis in range(3):
             rows.append(out + axis), cols.append(i + axis), vals.append(1.0 / np.sqrt(variance[axis]))
         out += 3
@@ -133,12 +136,21 @@ class WeightedLeastSquares:
         self.graph, self.weights = graph, weights
         self.scale = 1.0 / weights.shape[0]  # mean square: the tolerance does not depend on the recording's length
         self._weighted = (None, None)
+        self._base_columns = None
 
     def _linear(self, z: np.ndarray):
-        """``(W r, W J)`` at ``z``, one Jacobian evaluation per point."""
+        """``(W r, W J)`` at ``z``, one Jacobian evaluation per point (the base's velocity columns, constant, weighed
+        once)."""
         lin = self.graph.linearise(z)
         if self._weighted[0] is not lin:
-            self._weighted = (lin, (self.weights @ lin.r, self.weights @ lin.jac))
+            if self.graph.base is None:
+                weighted_jac = self.weights @ lin.jac
+            else:
+                n = self.graph.shape.n_variables
+                if self._base_columns is None:
+                    self._base_columns = self.weights @ lin.jac[:, n:]
+                weighted_jac = np.hstack([self.weights @ lin.jac[:, :n], self._base_columns])
+            self._weighted = (lin, (self.weights @ lin.r, weighted_jac))
         return self._weighted[1]
 
     def cost(self, z: np.ndarray) -> list:
@@ -181,15 +193,25 @@ class WeightedLeastSquares:
         return {"x": x, "f": cost(x)}, opts, keep
 
 
+#: Ipopt stops when the objective changes less than this (relative) over two iterations; on a moving base when it
+#: changes less than :data:`MOVING_OBJECTIVE_CHANGE` once: the tapered gyro means' weights raise the objective's
+#: round-off to 1e-9, and the generalised least squares after Ipopt takes its last step.
+OBJECTIVE_CHANGE = 1e-12
+MOVING_OBJECTIVE_CHANGE = 1e-8
+
+
 def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, tolerance: float, max_iterations: int,
-                progress: Callable[[str], None] | None, x0: np.ndarray | None = None):
+                progress: Callable[[str], None] | None, x0: np.ndarray | None = None,
+                objective_change: float = OBJECTIVE_CHANGE):
     """Stage 1: Ipopt from ``x0`` (default the reference, all variables 0) with the ``weights`` of
     :func:`quick_weights`.
 
     The Gauss-Newton Hessian ``J^T W J`` (``hessian="gauss-newton"``, as in CasADi's system-identification
     example) or Ipopt's ``"limited-memory"`` approximation, with the gradient from the compiled Jacobian
     (module docstring); ``"exact"``: CasADi's algorithmic derivatives of the whole chain on its virtual
-    machine (slow; for comparison).  Returns the decision vector and Ipopt's statistics.
+    machine (slow; for comparison).  ``objective_change``: the relative change of the objective over two
+    iterations below which Ipopt has converged (:data:`OBJECTIVE_CHANGE`).  Returns the decision vector and
+    Ipopt's statistics.
     """
     if hessian == "exact":
         nlp, opts, keep = _exact_problem(graph, weights), {}, []
@@ -202,7 +224,8 @@ def solve_ipopt(graph: ResidualGraph, weights: RowWeights, hessian: str, toleran
     # weights the gradient's round-off floor can exceed any fixed tolerance although Gauss-Newton has
     # converged.
     opts.update({"ipopt.print_level": 0, "print_time": False, "ipopt.tol": tolerance,
-                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": 1e-12, "ipopt.acceptable_iter": 2,
+                 "ipopt.acceptable_tol": 1e20, "ipopt.acceptable_obj_change_tol": objective_change,
+                 "ipopt.acceptable_iter": 2 if objective_change == OBJECTIVE_CHANGE else 1,
                  "ipopt.max_iter": max_iterations, "ipopt.sb": "yes", "ipopt.nlp_scaling_method": "none"})
     solver = ca.nlpsol("calibration", "ipopt", nlp, opts)
     with interruptions() as interrupted:
@@ -228,7 +251,11 @@ def _exact_problem(graph: ResidualGraph, weights: RowWeights) -> dict:
 
     symbolic = ShapeGraph(graph.shape.layouts, graph.names, compiled=False)
     w = ca.MX.sym("w", graph.n_variables)
-    r = ca.mtimes(weights.to_casadi(), symbolic.residuals(w, ca.DM(graph.data), ca.DM(graph.ref)))
+    n = graph.shape.n_variables
+    r = symbolic.residuals(w[:n], ca.DM(graph.data), ca.DM(graph.ref))
+    if graph.base is not None:
+        r = r - ca.mtimes(ca.DM(graph.base.matrix), w[n:])
+    r = ca.mtimes(weights.to_casadi(), r)
     return {"x": w, "f": 0.5 / weights.shape[0] * ca.dot(r, r)}
 
 

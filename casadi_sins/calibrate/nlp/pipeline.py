@@ -31,18 +31,19 @@ from ...data.recording import Recording
 from ...model.noise import SensorNoise
 from ...model.parameters import ParameterSet
 from ...model.registry import GROUPS, N_PARAMS, groups_in, model_names
-from ...noise.motion import describe_motion
+from ...noise.motion import describe_motion, sway_treatment
 from ...noise.plan import NoisePlan, plan_noise
 from ..initial import resolves_earth_rate, rough_parameters
 from ..limits import SCHEDULE_REMEDY, grade_levels, separation_warnings
 from ..result import CalibrationResult, NlpDetails, NoiseReport, outcome
 from ..steps import ROTATION_STEP_S, SWAY_STATIC_STEP_S, default_observation_spacing
 from ..wander import bias_cost, describe, natural_size, record, with_wander
+from .base import EXTRA_SEQUENCES
 from .diagnostics import STEP_CONSISTENCY_LIMIT, Assessment, assess
 from .evidence import candidate_groups, evidence_note, evidence_warning, group_evidence, is_21
 from .gls import Fit, fit_graph, generalised_least_squares
 from .graph import ResidualGraph, build_graph, natural_to_parameters, variable_scale
-from .ipopt import quick_weights
+from .ipopt import MOVING_OBJECTIVE_CHANGE, quick_weights
 from .likelihood import estimate_unmodelled, unmodelled_at_bounds
 from .selection import inseparable_group, model_groups, model_label, select_groups, unobservable_group
 from .start import RELINEARISE_NOISE, presolve, start_vector
@@ -86,6 +87,7 @@ class _Run:
     start: str = "ipopt"  # or "gauss-newton": stage 1 from a start fitted to the data (.start)
     navigation_grade: bool = True  # the gyros resolve the Earth rate (initial.resolves_earth_rate)
     relinearise: float | None = None  # the GLS's noise-model rebuild threshold (sigma), default gls'
+    distrust: list[str] = dataclasses.field(default_factory=list)
 
     def say(self, message: str) -> None:
         if self.progress:
@@ -94,8 +96,10 @@ class _Run:
     def build(self, names) -> ResidualGraph:
         # the 21 of the start, the extra terms at their prior: the reference the information criterion tests against
         reference = ParameterSet(self.initial.values[:N_PARAMS]).aligned(names)
+        tapers = {m.segment: m.taper.nw for m in self.noise_plan.motions if m.taper is not None}
+        referenced = {m.segment for m in self.noise_plan.motions if m.taper is not None and m.uses_reference}
         graph = build_graph(self.rec, reference, self.observe_s, self.rotation_step_s,
-                            self.static_step_s, names)
+                            self.static_step_s, names, tapers, base_bands(self.rec, self.noise_plan), referenced)
         self.built.append(graph)
         self.say(f"graph of {sum(len(p.step_dt) for p in graph.groups)} steps, {graph.n_variables} variables "
                  f"({len(names)} parameters), {graph.n_residuals} residuals built in {graph.build_time:.2f} s")
@@ -206,6 +210,9 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
     swaying = describe_motion(noise_plan.motions)
     if static_step_s is None:
         static_step_s = min(observe_s, SWAY_STATIC_STEP_S) if swaying else observe_s
+    linear = noise_plan.linear.describe() if noise_plan.linear is not None else None
+    if swaying or linear:
+        solve = dict(solve, objective_change=MOVING_OBJECTIVE_CHANGE)
     run = _Run(rec, initial, noise_plan, observe_s, rotation_step_s, static_step_s, groups, model, solve, progress,
                list(rec.warnings), t_start, noise_s, navigation_grade=navigation_grade)
     if mems_by_hand:
@@ -213,7 +220,28 @@ def _prepare(rec, initial, noise, model, static_block_s, static_step_s, rotation
         run.relinearise = RELINEARISE_NOISE  # its heading, weakly determined, would chase its own whitening
     if swaying:
         run.say(f"{swaying}; static segments stepped at {static_step_s:g} s")
+    if linear:
+        bands = base_bands(rec, noise_plan)
+        message = (f"{linear}: the base's velocity is estimated with the parameters, free within "
+                   f"{', '.join(f'{low:.3g}-{high:.3g} Hz ({axes})' for low, high, axes in bands)} and constant per "
+                   "group (the velocity's information in those bands is given up)")
+        run.warnings.append(message)
+        run.say(message)
     return run
+
+
+#: Frequency bins of the whole recording left on either side of a base motion's lines.
+BASE_BAND_MARGIN = 2.0
+
+
+def base_bands(rec: Recording, noise_plan: NoisePlan) -> list[tuple[float, float, str]] | None:
+    """The frequency bands (Hz) left to the base's velocity on a moving base, with the ENU axes each moves
+    (``None`` on a still one): its lines with :data:`BASE_BAND_MARGIN` frequency bins of the recording on either
+    side; bands closer than their signals reach beyond them (:data:`.base.EXTRA_SEQUENCES`) are one band."""
+    if noise_plan.linear is None or not noise_plan.linear.moving:
+        return None
+    bin_hz = 1.0 / float(rec.time[-1] - rec.time[0] + rec.dt)
+    return noise_plan.linear.bands(BASE_BAND_MARGIN * bin_hz, EXTRA_SEQUENCES * bin_hz)
 
 
 def _observable_graph(run: _Run) -> ResidualGraph:
@@ -289,8 +317,8 @@ def _fit_model(run: _Run, graph: ResidualGraph, use_rotation_steps) -> tuple[Res
             continue
         break
     if describe_motion(run.noise_plan.motions):
-        run.warnings.append(f"{describe_motion(run.noise_plan.motions)}: the static gyro means carry the sway's "
-                            f"variance, the navigation steps {run.static_step_s:g} s")
+        run.warnings.append(f"{describe_motion(run.noise_plan.motions)}: {sway_treatment(run.noise_plan.motions)}, "
+                            f"the navigation steps {run.static_step_s:g} s")
     return graph, fit
 
 
@@ -389,7 +417,9 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
         if c.name in final else "") for c in first]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
-    run.warnings += unmodelled_at_bounds(unmodelled, tops)
+    at_bounds = unmodelled_at_bounds(unmodelled, tops)
+    run.warnings += at_bounds
+    run.distrust += at_bounds
     run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
                         "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "
@@ -437,7 +467,8 @@ def _result(run: _Run, graph: ResidualGraph, fit: Fit, assessment: Assessment, t
         float(np.sqrt(np.mean(fit.whitened_residuals**2))), time.perf_counter() - run.t_start, SIGMA_MEANING,
         warnings, assessment.checks, assessment.variance_factor,
         NoiseReport(model, run.noise_plan.raw, assessment.fitted_noise, dict(run.noise_plan.source), run.wander),
-        run.noise_plan.motions, timings, nlp=details, notes=run.notes)
+        run.noise_plan.motions, timings, nlp=details, notes=run.notes, linear_motion=run.noise_plan.linear,
+        distrust=run.distrust)
 
 
 def _fmt(values) -> str:

@@ -16,7 +16,12 @@ strapdown step (:func:`nav.tangent.step_blocks`), so the graph is small and buil
 
 Residual rows per group, in time order: the velocity at each observed step, and after each static
 segment's last observation its mean compensated gyro rate minus the Earth rate seen in the navigated
-attitude at the segment's middle step (:mod:`noise.observations`).
+attitude at the segment's middle step (:mod:`noise.observations`).  On a swaying segment the gyro mean
+is tapered (:mod:`noise.taper`): the navigated attitude after each of the segment's steps against the
+middle one (its rotation vector, ENU), weighed by the window's coefficients, in body axes at the middle,
+``C_mid^T sum_k c_k 2 vec(q_k q_mid^-1)``: the rate at which the navigation turns away from the Earth,
+which is the gyros' error rate plus ``C_mid^T [w_ie x] phi`` (what the plain mean measures, without the
+sway's angle change).
 """
 
 from __future__ import annotations
@@ -51,6 +56,9 @@ class GroupLayout:
         Residual order: indices into the velocity rows (3 per observation) followed by the gyro rows.
     n_data : int
         Packed data rows of a step (:func:`nav.tangent.packed_sizes`).
+    tapered : tuple of (int, int)
+        Per static segment with a gyro mean, its first step and number of steps when its mean is tapered,
+        else ``(0, 0)``.
     """
 
     steps: int
@@ -58,12 +66,15 @@ class GroupLayout:
     mids: tuple[int, ...]
     order: tuple[int, ...]
     n_data: int
+    tapered: tuple[tuple[int, int], ...] = ()
 
     def sizes(self) -> list[tuple[str, int]]:
         """``(field, length)`` of the group's part of the data vector, in order."""
         s = len(self.mids)
         return [("steps", self.n_data * self.steps), ("q_start", 4), ("earth", 3), ("gravity", 1),
-                ("segment_gyro", 3 * s), ("segment_accel", 3 * s), ("segment_dt", s)]
+                ("segment_gyro", 3 * s), ("segment_accel", 3 * s), ("segment_dt", s),
+                ("taper", sum(count for _, count in self.tapered)),
+                ("taper_reference", 3 * sum(1 for _, count in self.tapered if count))]
 
     @property
     def size(self) -> int:
@@ -71,9 +82,9 @@ class GroupLayout:
         return sum(n for _, n in self.sizes())
 
 
-def group_layout(plan, names) -> tuple[GroupLayout, list[int]]:
+def group_layout(plan, names, tapered: set | frozenset = frozenset()) -> tuple[GroupLayout, list[int]]:
     """The layout of one group (a :class:`calibrate.steps.GroupSteps`) and its static segments with a gyro
-    mean, in residual order."""
+    mean, in residual order; the segments numbered in ``tapered`` get a tapered mean."""
     last_observation = {int(s): int(plan.observed[plan.segment_of == s][-1]) for s in np.unique(plan.segment_of)}
     order, segments = [], []
     n_velocity = 3 * len(plan.observed)
@@ -83,13 +94,22 @@ def group_layout(plan, names) -> tuple[GroupLayout, list[int]]:
         if step == last_observation[segment]:
             order += [n_velocity + 3 * len(segments) + a for a in range(3)]
             segments.append(segment)
+    spans = []
+    for segment in segments:
+        steps = np.flatnonzero(plan.step_segment == segment)
+        spans.append((int(steps[0]), len(steps)) if segment in tapered else (0, 0))
     layout = GroupLayout(len(plan.step_dt), tuple(int(i) for i in plan.observed),
-                         tuple(plan.middle_step(s) for s in segments), tuple(order), packed_sizes(names)[1])
+                         tuple(plan.middle_step(s) for s in segments), tuple(order), packed_sizes(names)[1],
+                         tuple(spans) if tapered else ())
     return layout, segments
 
 
-def group_data(site, plan, segments: list[int], q_start: np.ndarray, regressors=None) -> np.ndarray:
-    """The data vector of one group (:meth:`GroupLayout.sizes`), matrices column-major."""
+def group_data(site, plan, segments: list[int], q_start: np.ndarray, regressors=None,
+               taper_coefficients: dict | None = None, taper_references: dict | None = None) -> np.ndarray:
+    """The data vector of one group (:meth:`GroupLayout.sizes`), matrices column-major; ``taper_coefficients``:
+    segment -> the coefficients of its tapered mean on the attitudes after its steps
+    (:func:`noise.taper.point_coefficients`); ``taper_references``: segment -> the same mean of an attitude
+    reference's turns (ENU, rad/s; zero where none is read)."""
     steps = [plan.pulses_gyro, plan.pulses_accel, plan.step_dt[None], plan.previous_scale[None]]
     if regressors is not None:
         steps.append(regressors)
@@ -97,8 +117,10 @@ def group_data(site, plan, segments: list[int], q_start: np.ndarray, regressors=
     segment_gyro = np.array([plan.pulses_gyro[:, m].sum(axis=1) for m in masks]).reshape(-1, 3)
     segment_accel = np.array([plan.pulses_accel[:, m].sum(axis=1) for m in masks]).reshape(-1, 3)
     segment_dt = np.array([plan.step_dt[m].sum() for m in masks])
+    tapers, references = taper_coefficients or {}, taper_references or {}
     parts = [np.vstack(steps).ravel(order="F"), q_start, site.earth_rate, [site.g], segment_gyro.ravel(),
-             segment_accel.ravel(), segment_dt]
+             segment_accel.ravel(), segment_dt] + [tapers[s] for s in segments if s in tapers] + [
+        references.get(s, np.zeros(3)) for s in segments if s in tapers]
     return np.concatenate([np.asarray(x, dtype=float).ravel() for x in parts])
 
 
@@ -108,6 +130,24 @@ def _earth_in_body(nd: int) -> ca.Function:
     q, tangents, w = ca.SX.sym("q", 4), ca.SX.sym("Q", 4, nd), ca.SX.sym("w", 3)
     e = quat_to_dcm_expr(q).T @ w
     return ca.Function("earth_in_body", [q, tangents, w], [e, ca.jtimes(e, q, tangents)])
+
+
+@functools.lru_cache(maxsize=None)
+def _tapered_in_body(nd: int) -> ca.Function:
+    """``(q_mid, Q_mid, p, P, s) -> (r, R)``: the tapered mean ``r = C(q_mid)^T (2 vec(p q_mid^-1) - s)`` of the
+    weighted sum ``p = sum_k c_k q_k`` of a segment's attitudes (less ``s``, an attitude reference's turns
+    over the same window), and its tangents along the directions of ``Q_mid`` and ``P`` (4 x nd each).
+
+    ``2 vec(q_k q_mid^-1)`` is the rotation vector of ``q_k`` against the middle attitude to third order in
+    its angle (sway and drift within a segment are small), and linear in ``q_k``: the weighted sum of the
+    attitudes is taken first.
+    """
+    q_mid, mid_tangents = ca.SX.sym("q_mid", 4), ca.SX.sym("Q_mid", 4, nd)
+    p, p_tangents, reference = ca.SX.sym("p", 4), ca.SX.sym("P", 4, nd), ca.SX.sym("s", 3)
+    conjugate = ca.vertcat(q_mid[0], -q_mid[1:4])
+    r = quat_to_dcm_expr(q_mid).T @ (2 * quat_multiply_expr(p, conjugate)[1:4] - reference)
+    return ca.Function("tapered_in_body", [q_mid, mid_tangents, p, p_tangents, reference],
+                       [r, ca.jtimes(r, q_mid, mid_tangents) + ca.jtimes(r, p, p_tangents)])
 
 
 class _Chain:
@@ -139,6 +179,18 @@ class _Chain:
             pieces.append(self.outputs[b][list(rows), local.tolist()])
         taken = ca.horzcat(*pieces)
         return taken if np.all(order == np.arange(len(order))) else taken[:, np.argsort(order).tolist()]
+
+    def weighted(self, rows, first: int, weights) -> ca.MX:
+        """``sum_k weights[k] states[rows, first + k]`` over consecutive steps: each block's columns times its share
+        of the weights (a product per block, not a slice per state)."""
+        count = weights.shape[0]
+        total = 0
+        for b in range(first // self.size, (first + count - 1) // self.size + 1):
+            low, high = max(first, b * self.size), min(first + count, (b + 1) * self.size)
+            padded = ca.vertcat(ca.DM.zeros(low - b * self.size, 1), weights[low - first:high - first],
+                                ca.DM.zeros((b + 1) * self.size - high, 1))
+            total = total + self.outputs[b] @ padded
+        return total[list(rows)]
 
 
 def _interleave(per_axis):
@@ -265,7 +317,10 @@ class ShapeGraph:
             per_direction = ca.reshape(earth_tangents, 3 * nd, segments)  # row 3 i + a, column j
             gyro_jac = ca.jacobian(ca.vec(mean_rate), sym.w)[:, columns] - _interleave(
                 [per_direction[(3 * np.arange(nd) + a).tolist(), :] for a in range(3)])
-            r = ca.vertcat(r, ca.vec(mean_rate - earth))
+            gyro_r = ca.vec(mean_rate - earth)
+            if any(count for _, count in layout.tapered):
+                gyro_r, gyro_jac = _tapered_rows(chain, layout, fields, rows_q, nd, gyro_r, gyro_jac)
+            r = ca.vertcat(r, gyro_r)
             jac = ca.vertcat(jac, gyro_jac)
         order = list(layout.order)
         r, jac = r[order], jac[order, :]
@@ -284,8 +339,36 @@ class ShapeGraph:
         if segments:
             earth = _earth_in_body(1).map(segments)(chain.take(range(4), layout.mids), ca.DM.zeros(4, segments),
                                                     fields["earth"])[0]
-            r = ca.vertcat(r, ca.vec(sym.mean_rates(fields, segments) - earth))
+            gyro_r = ca.vec(sym.mean_rates(fields, segments) - earth)
+            if any(count for _, count in layout.tapered):
+                gyro_r = _tapered_rows(chain, layout, fields, None, 0, gyro_r, None)[0]
+            r = ca.vertcat(r, gyro_r)
         return r[list(layout.order)], chain.take(range(4), range(layout.steps))
+
+
+def _tapered_rows(chain: _Chain, layout: GroupLayout, fields: dict, rows_q, nd: int, gyro_r, gyro_jac):
+    """The gyro rows ``(r, J)`` (3 per segment) with the tapered segments' rows replaced by their tapered means
+    (module docstring, :func:`_tapered_in_body`); ``rows_q`` ``None``: the residuals alone (no tangents)."""
+    rows, blocks, offset, tapered = [], [], 0, 0
+    coefficients, references = fields["taper"], fields["taper_reference"]
+    for j, ((first, count), mid) in enumerate(zip(layout.tapered, layout.mids)):
+        if not count:
+            rows.append(gyro_r[3 * j:3 * j + 3])
+            blocks.append(gyro_jac[3 * j:3 * j + 3, :] if gyro_jac is not None else None)
+            continue
+        c = coefficients[offset:offset + count]
+        reference = references[3 * tapered:3 * tapered + 3]
+        offset, tapered = offset + count, tapered + 1
+        q_mid, weighted = chain.take(range(4), [mid]), chain.weighted(range(4), first, c)
+        if rows_q is None:
+            rows.append(_tapered_in_body(1)(q_mid, ca.DM.zeros(4, 1), weighted, ca.DM.zeros(4, 1), reference)[0])
+            continue
+        mid_tangents = ca.reshape(chain.take(rows_q, [mid]), 4, nd)  # rows 4 i + b
+        weighted_tangents = ca.reshape(chain.weighted(rows_q, first, c), 4, nd)
+        body, body_tangents = _tapered_in_body(nd)(q_mid, mid_tangents, weighted, weighted_tangents, reference)
+        rows.append(body)
+        blocks.append(body_tangents)
+    return ca.vertcat(*rows), (ca.vertcat(*blocks) if gyro_jac is not None else None)
 
 
 _GRAPHS: collections.OrderedDict = collections.OrderedDict()

@@ -12,7 +12,8 @@ Over blocks of :data:`BLOCK_S` its spectrum is flat without motion; a deck puts 
 periods of seconds to tens of seconds.  Their power over the white noise, summed over the segments,
 decides that the base moves (:data:`MOTION_SIGNIFICANCE` standard errors); the lines of each
 segment (:func:`noise.taper.rate_lines`) give the motion's periods and size, and the bands the
-estimator leaves to the base (:func:`motion_bands`).
+estimator leaves to the base (:func:`motion_bands`).  A session by hand (rests at any orientation) has no base:
+its rests' tremor is left to the noise model.
 
 A bounded linear motion has no power at zero frequency: the navigated velocity carries it, and the
 estimator gives each static segment a free base velocity within these bands (:mod:`calibrate.nlp.base`).
@@ -156,6 +157,10 @@ def linear_motion(rec: Recording, params, noise: SensorNoise, increments: dict |
     """The base's linear motion in the static segments of a recording (module docstring); ``increments``: the
     static segments' compensated increments by segment number (:func:`noise.motion.static_increments`), if at
     hand.  The lines are sought only when the power says the base moves."""
+    if any(seg.is_free for seg in rec.segments):
+        # rests at any orientation: a unit held or set down by hand has no base; what moves it in a rest is the
+        # hand's tremor and settling, which the rests' noise takes (a hand session's rests are seconds long)
+        return LinearMotion(0.0, 1.0, [])
     model = noise.complete()
     block = max(1, int(round(BLOCK_S * rec.rate_hz)))
     step = block * rec.dt

@@ -42,3 +42,21 @@ def test_calibrate_refuses_a_distrusted_table_and_writes_it_marked_only_when_tol
     report = json.loads((tmp_path / "out" / "params.report.json").read_text())
     assert report["distrusted"] == distrusted.distrust
     assert "NOT TO BE TRUSTED" in (tmp_path / "out" / "params.report.md").read_text()
+
+
+def test_an_unmodelled_term_at_a_top_raised_by_its_own_residuals_is_no_distrust():
+    """A MEMS unit whose gyro means the data cannot bound (imucal's session segmented from its raw CSV) reaches
+    the top its residuals set: a warning that they weigh nothing, not distrust; the fixed navigation-grade top
+    reached is distrust."""
+    from casadi_sins.calibrate.nlp.likelihood import UNMODELLED_RATE_RANGE, unmodelled_at_bounds
+    from casadi_sins.model.noise import SensorNoise
+
+    fixed = UNMODELLED_RATE_RANGE[1]
+    raised = SensorNoise(unmodelled_rate=100 * fixed)
+    tops = {"unmodelled_rate": 100 * fixed}
+    (warning,) = unmodelled_at_bounds(raised, tops)
+    assert "do not bound it" in warning and "not to be trusted" not in warning
+    assert unmodelled_at_bounds(raised, tops, binding_only=True) == []
+    at_fixed = SensorNoise(unmodelled_rate=fixed)
+    (distrust,) = unmodelled_at_bounds(at_fixed, {"unmodelled_rate": fixed}, binding_only=True)
+    assert "not to be trusted" in distrust

@@ -111,18 +111,31 @@ def estimate_free_terms(model: SensorNoise, noise_plan: NoisePlan, system: Noise
     return estimate_terms(system, columns, model, terms)
 
 
-def unmodelled_at_bounds(noise: SensorNoise, tops: dict | None = None) -> list[str]:
+def unmodelled_at_bounds(noise: SensorNoise, tops: dict | None = None, binding_only: bool = False) -> list[str]:
     """Warnings for unmodelled terms that reached the top of their search range (``tops``, field -> SI, from
     :func:`estimate_unmodelled`; default the navigation-grade ranges): the errors outside the model are larger
-    than it can represent, and the sigma may not cover them."""
+    than it can represent, and the sigma may not cover them.
+
+    With ``binding_only`` only the terms whose top is the fixed navigation-grade one: a top raised to
+    :data:`UNMODELLED_HEADROOM` times the fit's own residuals (a MEMS unit) that is reached says that the data
+    cannot bound the term (its residuals then weigh nothing, which the sigma accounts for), not that the errors
+    exceed what the model can hold."""
     tops = tops or {}
     out = []
     for name, value, (_, high), unit, scale in (
             ("unmodelled acceleration", noise.unmodelled_acceleration, UNMODELLED_ACCELERATION_RANGE, "m/s^2", 1.0),
             ("unmodelled rate", noise.unmodelled_rate, UNMODELLED_RATE_RANGE, "rad/s", 1.0),
             ("unmodelled step", noise.unmodelled_step, UNMODELLED_STEP_RANGE, "m/s", 1.0)):
-        high = tops.get(name.replace(" ", "_"), high)
-        if value >= 0.9 * high:
+        fixed, high = high, tops.get(name.replace(" ", "_"), high)
+        if binding_only and high > fixed:
+            continue
+        if value < 0.9 * high:
+            continue
+        if high > fixed:  # the top was raised to the residuals' headroom: the data do not bound the term
+            out.append(f"the {name} reached the top of its range ({value / scale:.3g} {unit}, {UNMODELLED_HEADROOM:g} "
+                       "times the residuals): the data do not bound it, so the residuals it sits on carry no weight "
+                       "(the sigma is of what the rest determines)")
+        else:
             out.append(f"the {name} reached its bound ({value / scale:.3g} of at most {high:g} {unit}): the errors "
                        "outside the model are beyond what it can represent; this table is not to be trusted")
     return out

@@ -417,9 +417,8 @@ def _assess(run: _Run, graph: ResidualGraph, fit: Fit) -> tuple[Fit, Assessment]
         if c.name in final else "") for c in first]
     step = (f", {unmodelled.unmodelled_step * 1e3:.3g} mm/s per velocity step across a rotation"
             if fit.use_rotation_steps else "")
-    at_bounds = unmodelled_at_bounds(unmodelled, tops)
-    run.warnings += at_bounds
-    run.distrust += at_bounds
+    run.warnings += unmodelled_at_bounds(unmodelled, tops)
+    run.distrust += unmodelled_at_bounds(unmodelled, tops, binding_only=True)  # a MEMS unit's unbounded term: no doubt
     run.warnings.append(f"under the sensor noise alone the residuals exceeded it ({'; '.join(failed)}; the Checks "
                         "table is of the final fit): errors outside the model "
                         f"were added to it: {unmodelled.unmodelled_acceleration / UG:.3g} ug unmodelled acceleration "

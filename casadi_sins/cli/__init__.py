@@ -3,6 +3,9 @@
 Every failure is one line on standard error naming the file (and line) at fault, with exit status
 2; Ctrl-C prints ``interrupted`` (130), SIGTERM or SIGHUP ``terminated`` (143); nothing is left
 half-written (every command writes its outputs together) and no worker process outlives the command.
+Every input is registered as it is found (:mod:`core.guard`) and a command owns its output set
+(:mod:`cli.outputs`): the files of an earlier run it does not write again are removed with its writes,
+and no input is ever written over or removed.
 """
 
 from __future__ import annotations
@@ -16,12 +19,13 @@ import traceback
 
 from ..calibrate.result import CalibrationError
 from ..core.errors import InputError, OutputError
-from ..core.files import check_writable, gathered_writes
+from ..core.files import check_writable, claim_outputs, gathered_writes
 from ..core.guard import guarded_inputs
 from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
 from .inputs import command_inputs
+from .outputs import command_outputs
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
@@ -123,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
             with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
                                      else gathered_writes()):
+                claim_outputs(command_outputs(args))  # what this run owns: never an input, before any computation
                 return args.func(args)
     except BaseException as exc:  # noqa: BLE001 (every outcome is one line and a status)
         return _outcome(name, exc)

@@ -106,12 +106,8 @@ def cmd_navigate(args) -> int:
 def cmd_segment(args) -> int:
     """``segment``: find the schedule of a CSV and write its description."""
     data = Path(args.data)
-    if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
-        raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
-    name = args.name or Path(args.out).stem
-    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
-        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
-                       f"{one_line(repr(name), 80)}")
+    check_site_options(args.latitude, args.height)
+    name = check_name_option(args.name or Path(args.out).stem)
     time_, pulses = read_samples(data, args.rate)
     site = Site(np.radians(args.latitude), args.height, args.gravity)
     try:
@@ -125,6 +121,21 @@ def cmd_segment(args) -> int:
     print(recording_summary(rec))
     print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
+
+
+def check_site_options(latitude: float, height: float) -> None:
+    """``--latitude`` and ``--height`` as a recording description accepts them (finite, on the ground)."""
+    if not -90.0 <= latitude <= 90.0 or not -500.0 <= height <= 10000.0:  # false for nan
+        raise CliError(f"--latitude must be within -90..90 deg and --height within -500..10000 m, found "
+                       f"{latitude:g} and {height:g}")
+
+
+def check_name_option(name: str) -> str:
+    """A recording name (``--name``) as a recording description accepts it."""
+    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
+        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
+                       f"{one_line(repr(name), 80)}")
+    return name
 
 
 def cmd_export(args) -> int:

@@ -1,9 +1,14 @@
-"""Outputs never over inputs: the files a command reads, and the checks of every place it writes.
+"""Outputs never over inputs: the registry of the files a command reads, and the checks of every place it
+writes or removes.
 
-While a command runs (:func:`guarded_inputs`), every input it names is registered by identity
-(device and inode, so a link or a second hard link is the same file); an output that is one of them,
-or an existing output that is not a regular file (a device, a FIFO, a socket, or a link to one), is
-refused before anything is written over it.
+While a command runs (:func:`guarded_inputs`), every input is registered by identity (device and inode,
+so a link or a second hard link is the same file) as it is discovered: the files the command line names,
+the recordings found in a folder, a description's data file, a table's companion report, and every file
+a reader opens (:func:`core.inputs.check_input_file` registers it).  An output that is one of them, or an
+existing output that is not a regular file (a device, a FIFO, a socket, or a link to one), is refused
+before anything is written over it (:func:`check_output_target`); a file of an earlier run that the
+command would remove is checked the same way first (:func:`check_removable`): no input is ever written
+over or removed.
 """
 
 from __future__ import annotations
@@ -26,11 +31,16 @@ def guarded_inputs(paths=()):
     global _INPUTS
     previous, _INPUTS = _INPUTS, {}
     try:
-        for path in paths:
-            register_input(*(path if isinstance(path, tuple) else (path,)))
+        register_inputs(paths)
         yield
     finally:
         _INPUTS = previous
+
+
+def register_inputs(items) -> None:
+    """:func:`register_input` of each item: a path, or ``(path, role)``."""
+    for item in items:
+        register_input(*(item if isinstance(item, tuple) else (item,)))
 
 
 def register_input(path, role: str | None = None) -> None:
@@ -44,6 +54,21 @@ def register_input(path, role: str | None = None) -> None:
         return
     if stat.S_ISREG(info.st_mode):
         _INPUTS.setdefault((info.st_dev, info.st_ino), (str(path), role))
+
+
+def input_role(path) -> str | None:
+    """How the running command came to read ``path`` (``"it is X"``, its role), ``""`` for an input with no
+    role, or None when ``path`` is not one of its inputs (or does not exist)."""
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    found = (_INPUTS or {}).get((info.st_dev, info.st_ino))
+    if found is None:
+        return None
+    source, role = found
+    same = [] if os.path.abspath(source) == os.path.abspath(path) else [f"it is {source}"]
+    return ", ".join(same + ([role] if role else []))
 
 
 def check_output_target(path) -> None:
@@ -66,10 +91,33 @@ def check_output_target(path) -> None:
     if not stat.S_ISREG(info.st_mode):
         raise OutputError(f"{path}: is not a regular file (a device, FIFO or socket, or a link to one): refusing "
                           "to replace it")
-    found = (_INPUTS or {}).get((info.st_dev, info.st_ino))
-    if found is not None:
-        source, role = found
-        same = [] if os.path.abspath(source) == os.path.abspath(path) else [f"it is {source}"]
-        what = f" ({', '.join(same + ([role] if role else []))})" if same or role else ""
-        raise OutputError(f"{path}: is an input of this command{what}: refusing to write over it; choose "
-                          "another output name")
+    role = input_role(path)
+    if role is not None:
+        raise OutputError(f"{path}: is an input of this command{f' ({role})' if role else ''}: refusing to write "
+                          "over it; choose another output name")
+
+
+def check_removable(path) -> bool:
+    """Whether ``path`` (a file of an earlier run that the running command owns and does not write again)
+    exists to be removed; refuse when it is an input of the command or not a regular file.
+
+    Raises
+    ------
+    OutputError
+        One line naming ``path`` (and the input it is).
+    """
+    path = Path(path)
+    if not os.path.lexists(path):
+        return False
+    try:
+        info = os.stat(path)
+    except OSError:
+        return True  # a dangling link: removing the link loses nothing
+    if not stat.S_ISREG(info.st_mode):
+        raise OutputError(f"{path}: would be replaced by this run's outputs but is not a regular file (a folder, "
+                          "device, FIFO or socket): refusing to remove it; move it away or choose another output name")
+    role = input_role(path)
+    if role is not None:
+        raise OutputError(f"{path}: is an input of this command{f' ({role})' if role else ''} and also a file this "
+                          "command writes or replaces: refusing to remove it; choose another output name")
+    return True

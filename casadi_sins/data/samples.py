@@ -7,8 +7,9 @@ pulses may be floats or integers.  ``.gz``, ``.bz2``, ``.xz`` and ``.zip`` files
 from __future__ import annotations
 
 import csv
-import math
+import functools
 import io
+import math
 import warnings
 from pathlib import Path
 
@@ -36,10 +37,12 @@ MAX_LINE_BYTES = 1 << 20
 MAX_PULSE = 2.0**53
 
 
-def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False) -> tuple:
+def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False, source=None) -> tuple:
     """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
 
     With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one.
+    ``source`` (a function returning a binary file object) reads CSV bytes made in memory instead of the
+    file, exactly as the file would be read (``data_path`` then only names them in messages).
 
     The file is read block by block (:data:`BLOCK_BYTES`) and every block is checked before the next is
     read: exactly the header's number of fields in each row (a comma inside a number would shift the
@@ -53,18 +56,20 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     InputError
         Naming the file, line and column of the first problem.
     """
-    size = check_input_file(data_path, "data file (the CSV of samples that 'data' must name)")
-    check_memory_for(data_path, size)
+    if source is None:
+        size = check_input_file(data_path, "data file (the CSV of samples that 'data' must name)")
+        check_memory_for(data_path, size)
+        source = functools.partial(open_binary, data_path)
     try:
-        columns = _header(data_path)
+        columns = _header(data_path, source)
         wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
-        values = _stream(data_path, columns, 1.0 / rate_hz, wanted)
+        values = _stream(data_path, columns, 1.0 / rate_hz, wanted, source)
     except InputError:
         raise
     except MemoryError:
         raise InputError(data_path, "not enough memory to read it") from None
     except UnicodeDecodeError:
-        _raise_encoding_error(data_path)
+        _raise_encoding_error(data_path, source)
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
@@ -76,9 +81,9 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     return time, pulses, (values[:, len(COLUMNS)].copy() if len(wanted) > len(COLUMNS) else None)
 
 
-def _header(data_path: Path) -> list[str]:
+def _header(data_path: Path, source) -> list[str]:
     """The header's column names (stripped), checked for the format's columns."""
-    line = first_line(data_path)
+    line = first_line(data_path, opener=source)
     columns = [c.strip() for c in next(csv.reader([line]), [])]
     if len(columns) > MAX_COLUMNS:
         raise InputError(data_path, f"the header has {len(columns)} columns, more than {MAX_COLUMNS}: not a CSV of "
@@ -93,9 +98,9 @@ def _header(data_path: Path) -> list[str]:
     return columns
 
 
-def _blocks(data_path: Path):
+def _blocks(data_path: Path, source):
     """``(first line number, bytes of whole lines)`` after the header, :data:`BLOCK_BYTES` at a time."""
-    with open_binary(data_path) as handle:
+    with source() as handle:
         handle.readline(MAX_LINE_BYTES)
         line, carry = 2, b""
         while True:
@@ -113,11 +118,11 @@ def _blocks(data_path: Path):
                 return
 
 
-def _stream(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS) -> np.ndarray:
+def _stream(data_path: Path, columns: list[str], dt: float, wanted, source) -> np.ndarray:
     """Every row's ``wanted`` columns, block by block, each block checked before the next is read."""
     parts: list[np.ndarray] = []
     held, budget, last = 0, memory_available(), None
-    for line, block in _blocks(data_path):
+    for line, block in _blocks(data_path, source):
         values = _block_values(data_path, columns, line, block, wanted)
         last = _check_block(data_path, values, line, block, dt, last)
         parts.append(values)
@@ -243,10 +248,10 @@ def _line_of(block: bytes, line: int, row: int) -> int:
     return line + row
 
 
-def _raise_encoding_error(data_path: Path):
+def _raise_encoding_error(data_path: Path, source):
     """Name the line of the first byte that is not UTF-8."""
     line = 1
-    with open_binary(data_path) as handle:
+    with source() as handle:
         for line, raw in enumerate(handle, start=1):
             try:
                 raw.decode("utf-8")
@@ -274,13 +279,47 @@ def samples_csv(time: np.ndarray, gyro: np.ndarray, accel: np.ndarray, rows: sli
     return frame.to_csv(index=False, header=header, lineterminator="\n")
 
 
+def samples_chunks(rec):
+    """The CSV of a recording's samples as bytes, :data:`CSV_CHUNK` rows at a time."""
+    for first in range(0, max(len(rec.time), 1), CSV_CHUNK):
+        yield samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK), header=first == 0,
+                          temperature=rec.temperature).encode("utf-8")
+
+
 def samples_writer(rec):
     """A function writing the CSV of a recording into a binary file object, in chunks (see
     :func:`core.files.write_files`)."""
 
     def write(handle) -> None:
-        for first in range(0, len(rec.time), CSV_CHUNK):
-            handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                     header=first == 0, temperature=rec.temperature).encode("utf-8"))
+        for chunk in samples_chunks(rec):
+            handle.write(chunk)
 
     return write
+
+
+class _ChunkStream(io.RawIOBase):
+    """A binary file object reading the bytes of an iterable of chunks (made as they are read)."""
+
+    def __init__(self, chunks):
+        self._chunks, self._left = iter(chunks), b""
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        while not self._left:
+            self._left = next(self._chunks, None)
+            if self._left is None:
+                self._left = b""
+                return 0
+        n = min(len(buffer), len(self._left))
+        buffer[:n], self._left = self._left[:n], self._left[n:]
+        return n
+
+
+def samples_as_read(rec, data_path) -> tuple:
+    """``(time, pulses, temperature)`` of a recording's samples as :func:`read_samples` reads them back once
+    written as the CSV ``data_path``: the same text, made in memory a chunk at a time, through the same
+    reader and its checks (nothing is written)."""
+    return read_samples(Path(data_path), rec.rate_hz, with_temperature=True,
+                        source=lambda: io.BufferedReader(_ChunkStream(samples_chunks(rec)), BLOCK_BYTES))

@@ -43,7 +43,8 @@ from ..data.segmentation import refine
 from ..data.tables import table_text
 from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
-from ..report.calibration import certificate_path, companion_paths, recording_hash, report_files
+from ..report.calibration import (calibration_outputs, certificate_path, companion_paths, recording_hash,
+                                  report_files)
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
@@ -80,13 +81,13 @@ def file_hash(rec_path) -> str | None:
     return recording_hash(types.SimpleNamespace(source=Path(rec_path)))
 
 
-def finished(rec_path, out_dir) -> dict | None:
+def finished(rec_path, out_dir, certificate: bool = False) -> dict | None:
     """The report of a unit already calibrated from this very recording, or None: the report (the ledger)
     names the recording's SHA-256 as it is now and the SHA-256 of the stored table as it is now (a table
-    changed, truncated or replaced since is calibrated again)."""
+    changed, truncated or replaced since is calibrated again); with ``certificate`` its certificate exists."""
     table = unit_table_path(out_dir, rec_path)
     report = companion_paths(table)[0]
-    if not (table.is_file() and report.is_file()):
+    if not (table.is_file() and report.is_file()) or (certificate and not certificate_path(table).is_file()):
         return None
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
@@ -143,15 +144,20 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
 
 
 def unit_files(out_dir, rec_path) -> list[Path]:
-    """Every file a unit's calibration writes under ``OUT/units/`` (table, report, certificate)."""
-    table = unit_table_path(out_dir, rec_path)
-    return [table, *companion_paths(table), certificate_path(table)]
+    """The output set of a unit under ``OUT/units/``: its table and every file of the table's stem
+    (:func:`report.calibration.calibration_outputs`); those a new calibration does not write are removed with
+    its writes, all of them when it failed (no stale table, certificate or export beside a failure)."""
+    return calibration_outputs(unit_table_path(out_dir, rec_path))
 
 
-def remove_stale(out_dir, rec_path) -> None:
-    """Remove a unit's files left by an earlier run (its calibration failed now: no stale table beside it)."""
-    for path in unit_files(out_dir, rec_path):
-        path.unlink(missing_ok=True)
+#: The fleet's own files in OUT.
+FLEET_FILES = ("fleet.csv", "fleet.md", "fleet-spread.csv", "fleet-spread.md")
+
+
+def batch_outputs(out_dir, recordings: Sequence) -> list[Path]:
+    """Every file a batch of ``recordings`` into ``out_dir`` may write or replace: the fleet tables and each
+    unit's output set (:func:`unit_files`), to be claimed before any unit is calibrated."""
+    return [Path(out_dir) / name for name in FLEET_FILES] + [p for rec in recordings for p in unit_files(out_dir, rec)]
 
 
 def same_sheet(data: dict, options: BatchOptions) -> bool:
@@ -205,7 +211,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
     rows: dict[str, dict] = {}
     pending = []
     for path in paths:
-        data = finished(path, out_dir) if resume else None
+        data = finished(path, out_dir, options.certificate) if resume else None
         if data is None or not same_sheet(data, options):
             pending.append(path)
         else:
@@ -216,10 +222,7 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
 
     def collect(result: dict) -> None:
         nonlocal done
-        if result["files"]:
-            write_files(result["files"])
-        else:
-            remove_stale(out_dir, result["row"]["recording"])
+        write_files(result["files"], stale=unit_files(out_dir, result["row"]["recording"]))
         rows[result["row"]["recording"]] = {**result["row"], "resumed": False}
         done += 1
         if progress:

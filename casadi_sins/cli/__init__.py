@@ -16,11 +16,12 @@ import signal
 import sys
 import threading
 import traceback
+import warnings
 
 from ..calibrate.result import CalibrationError
 from ..core.errors import InputError, OutputError
 from ..core.files import check_writable, claim_outputs, gathered_writes
-from ..core.guard import guarded_inputs
+from ..core.guard import guarded_inputs, last_input
 from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
@@ -116,13 +117,29 @@ def _reader_may_leave():
         sys.stdout = previous
 
 
+@contextlib.contextmanager
+def _warnings_in_our_words():
+    """While a command runs, a warning of ours (``warnings.warn`` in casadi_sins) is one line ``warning: ...``
+    on standard error; the libraries' warnings (NumPy's RuntimeWarning on an overflow, matplotlib's, pandas')
+    are silenced: what they would mean reaches the user through our own checks and messages."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"warning: {one_line(message, 2000)}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        warnings.filterwarnings("default", category=UserWarning, module=r"casadi_sins(\.|$)")
+        warnings.showwarning = show
+        yield
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``casadi-sins`` with ``argv``; returns the exit status (0; 2 for a failure told in one line; 130
     interrupted; 143 terminated)."""
     args = build_parser().parse_args(argv)
     name = f"casadi-sins {args.command}"
     try:
-        with _termination_handled(), _reader_may_leave(), guarded_inputs(command_inputs(args)):
+        with _termination_handled(), _reader_may_leave(), _warnings_in_our_words(), \
+                guarded_inputs(command_inputs(args)):
             if getattr(args, "out", None):
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
             with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
@@ -148,7 +165,9 @@ def _outcome(name: str, exc: BaseException) -> int:
         print("interrupted", file=sys.stderr)
         return 130
     except MemoryError:
-        return _fail(name, "not enough memory for this command (a larger machine, or a shorter recording)")
+        last = last_input()
+        return _fail(name, f"not enough memory{f' (last input read: {one_line(last, 300)})' if last else ''}: free "
+                     "memory, use a larger machine, or give this command less to do")
     except ImportError as exc:
         return _fail(name, f"cannot load {exc.name or 'a module'} ({one_line(exc)}): reinstall casadi-sins, or "
                      "free memory")

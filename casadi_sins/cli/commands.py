@@ -245,6 +245,7 @@ def cmd_analyze(args) -> int:
 def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
     check_scheduler(args.dask)  # before any work or progress bar
+    MC.check_runs(args.runs)
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)

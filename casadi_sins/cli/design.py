@@ -66,6 +66,9 @@ def cmd_design(args) -> int:
     base = load_problem(args.problem)
     if args.evaluations < 1 or args.verify < 0 or not args.cap > 0 or not 0 < args.hours < float("inf"):
         raise CliError("--evaluations must be at least 1, --verify 0 or more, --cap and --hours positive")
+    if args.verify:
+        from ..studies.montecarlo import check_runs
+        check_runs(args.verify, "--verify")
     from ..studies.budget import MAX_HOURS
     if args.hours > MAX_HOURS:
         raise CliError(f"--hours {args.hours:g} is beyond {MAX_HOURS:g} h: the navigation criterion is propagated at "

@@ -19,13 +19,12 @@ import contextlib
 import hashlib
 import io
 import os
-import signal
 import tempfile
-import threading
 from pathlib import Path
 
 from .errors import OutputError
 from .guard import check_output_target, check_removable
+from .signals import signals_held
 
 #: The writes staged by :func:`gathered_writes` (``None``: written at once).
 _PENDING: dict | None = None
@@ -240,7 +239,7 @@ def write_files(files: dict, stale=()) -> list[Path]:
                 else:
                     handle.write(data)
             os.chmod(tmp, 0o666 & ~_umask())
-        with _signals_held():  # the renames are one step: a signal waits until they are done
+        with signals_held():  # the renames are one step: a signal waits until they are done
             for path in stale:
                 current = path
                 tmp = _aside_name(path)
@@ -275,23 +274,6 @@ def _aside_name(path: Path) -> str:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".old", dir=path.parent)
     os.close(fd)
     return tmp
-
-
-#: The signals a command ends on (:mod:`cli`): held while the renames of :func:`write_files` run.
-_HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-
-
-@contextlib.contextmanager
-def _signals_held():
-    """Delay Ctrl-C, SIGTERM and SIGHUP until the block is done (the main thread only; elsewhere nothing)."""
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def file_sha256(path: str | Path) -> str:

@@ -23,13 +23,15 @@ from .errors import OutputError
 #: ``(device, inode) -> (path as the user named it, its role or None)`` of the running command's inputs
 #: (``None``: no command runs).
 _INPUTS: dict[tuple[int, int], tuple[str, str | None]] | None = None
+#: The input registered last by the running (or last) command: what it was reading, for a message.
+_LAST: str | None = None
 
 
 @contextlib.contextmanager
 def guarded_inputs(paths=()):
     """Register ``paths`` (and, within the block, any :func:`register_input`) as inputs of one command."""
-    global _INPUTS
-    previous, _INPUTS = _INPUTS, {}
+    global _INPUTS, _LAST
+    previous, _INPUTS, _LAST = _INPUTS, {}, None
     try:
         register_inputs(paths)
         yield
@@ -53,7 +55,15 @@ def register_input(path, role: str | None = None) -> None:
     except (OSError, ValueError):
         return
     if stat.S_ISREG(info.st_mode):
+        global _LAST
         _INPUTS.setdefault((info.st_dev, info.st_ino), (str(path), role))
+        _LAST = str(path)
+
+
+def last_input() -> str | None:
+    """The input the running command (or the last one) registered last: the file it was reading or had read
+    last, to name in a message about memory."""
+    return _LAST
 
 
 def input_role(path) -> str | None:

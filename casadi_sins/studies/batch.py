@@ -32,7 +32,7 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..calibrate import calibrate
+from ..calibrate import calibrate, prepare_compiled
 from ..core.errors import InputError
 from ..core.files import file_sha256, safe_stem, write_files
 from ..core.text import one_line, plural, spreadsheet_cell
@@ -228,6 +228,8 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
         if progress:
             progress(done, len(paths))
 
+    if pending and (workers != 1 or scheduler):  # compiled here once, not by every worker at the same time
+        prepare_compiled(options.model, True)
     task = functools.partial(calibrate_unit, out_dir=str(out_dir), options=options)
     workers = min(workers or os.cpu_count() or 1, max(len(pending), 1)) if not scheduler else workers
     for result in run_all(task, pending, workers, scheduler) if pending else ():

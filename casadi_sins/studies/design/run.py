@@ -9,6 +9,7 @@ from typing import Callable
 
 import numpy as np
 
+from ...core.inputs import memory_available
 from ...data.problem import Problem
 from .. import montecarlo as MC
 from ..consistency import consistency
@@ -55,6 +56,30 @@ def check_limits(limits: Limits) -> None:
                           f"{limits.handling_s:g} s)")
 
 
+#: Samples of one scored schedule times the schedules scored (``--evaluations``): the default search of the
+#: paper's problem is 4e7 (about a minute); beyond this budget a search would take many hours.
+SEARCH_BUDGET = 2e9
+#: Memory one prediction holds per sample of its schedule, bytes (measured: 0.4 kB).
+PREDICTION_BYTES_PER_SAMPLE = 400.0
+
+
+def check_budget(limits: Limits, rate_hz: float, evaluations: int) -> None:
+    """One line, naming the limit and the options, for a search beyond :data:`SEARCH_BUDGET` or beyond the
+    memory its predictions need: before anything is allocated."""
+    samples = limits.total_s * rate_hz
+    if samples * evaluations > SEARCH_BUDGET:
+        longest = SEARCH_BUDGET / evaluations / rate_hz
+        raise DesignError(f"--total-s {limits.total_s:g} s at {rate_hz:g} Hz is {samples:.3g} samples per schedule "
+                          f"scored, times --evaluations {evaluations}: beyond the search budget of {SEARCH_BUDGET:.3g} "
+                          f"samples x evaluations (hours of search); lower --total-s (at most {longest:.0f} s with "
+                          f"{evaluations} evaluations) or --evaluations")
+    need, free = samples * PREDICTION_BYTES_PER_SAMPLE, memory_available()
+    if need > free / 2:
+        raise DesignError(f"--total-s {limits.total_s:g} s at {rate_hz:g} Hz is {samples:.3g} samples per schedule: "
+                          f"its prediction needs about {need / 1e9:.3g} GB of memory, {max(free, 0.0) / 1e9:.3g} GB "
+                          f"are available; lower --total-s (at most {free / 2 / PREDICTION_BYTES_PER_SAMPLE / rate_hz:.0f} s)")
+
+
 def default_rate(base: Problem) -> float:
     """The input schedule's peak turn rate (deg/s): the table's rate unless told otherwise."""
     return peak_rate_deg_s(base)
@@ -68,6 +93,7 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
     rotation scheme, with ``criterion="navigation"``) scores the navigation of the modulated INS."""
     say = progress or (lambda text: None)
     check_limits(limits)
+    check_budget(limits, base.rate_hz, evaluations)
     t0 = time.perf_counter()
     crit = Criterion(criterion, base, model, cap, hours, scheme)
     say(f"input schedule {base.name}: predicted; searching under {limits.total_s:g} s")

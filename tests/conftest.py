@@ -69,3 +69,33 @@ def peer_recording():
 def peer_truth():
     """Its truth: the 21-parameter part of the generator's errors."""
     return read_table(PEER / "psins-19pos.truth.csv")
+
+
+@pytest.fixture()
+def cli_keeps_inputs(capsys):
+    """Run the command line on ``args``: its exit status is ``status``, standard error one line (no traceback)
+    holding every ``needle`` (for a failure, status 2; ``lines=0``: nothing, as a batch whose units failed
+    reports them in its fleet table), and every file of ``inputs`` still there with the same SHA-256.  Returns
+    the standard error.  ``cli_keeps_inputs(args, inputs, status=2, *needles, lines=1)``."""
+    import hashlib
+
+    from casadi_sins.cli import main
+
+    def digest(path):
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+    def run(args, inputs, status=2, *needles, lines=1):
+        before = {Path(p): digest(p) for p in inputs}
+        capsys.readouterr()
+        got = main([str(a) for a in args])
+        err = capsys.readouterr().err.strip()
+        assert got == status, (got, err)
+        assert "Traceback" not in err and "internal error" not in err, err
+        if status == 2:
+            assert len(err.splitlines()) == lines, err
+        for needle in needles:
+            assert needle in err, (needle, err)
+        assert {p: digest(p) for p in before} == before, "an input changed"
+        return err
+
+    return run

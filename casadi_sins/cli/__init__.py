@@ -19,7 +19,7 @@ import traceback
 import warnings
 
 from ..calibrate.result import CalibrationError
-from ..core.errors import InputError, OutputError
+from ..core.errors import Caution, InputError, OutputError
 from ..core.files import check_writable, claim_outputs, gathered_writes
 from ..core.guard import guarded_inputs, last_input
 from ..core.text import one_line
@@ -119,7 +119,7 @@ def _reader_may_leave():
 
 @contextlib.contextmanager
 def _warnings_in_our_words():
-    """While a command runs, a warning of ours (``warnings.warn`` in casadi_sins) is one line ``warning: ...``
+    """While a command runs, a warning of ours (:class:`~core.errors.Caution`) is one line ``warning: ...``
     on standard error; the libraries' warnings (NumPy's RuntimeWarning on an overflow, matplotlib's, pandas')
     are silenced: what they would mean reaches the user through our own checks and messages."""
     def show(message, category, filename, lineno, file=None, line=None):
@@ -127,7 +127,7 @@ def _warnings_in_our_words():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        warnings.filterwarnings("default", category=UserWarning, module=r"casadi_sins(\.|$)")
+        warnings.filterwarnings("default", category=Caution)
         warnings.showwarning = show
         yield
 
@@ -135,7 +135,10 @@ def _warnings_in_our_words():
 def main(argv: list[str] | None = None) -> int:
     """Run ``casadi-sins`` with ``argv``; returns the exit status (0; 2 for a failure told in one line; 130
     interrupted; 143 terminated)."""
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help, --version (0) or a bad argument, told in one line (2)
+        return exc.code if isinstance(exc.code, int) else 2
     name = f"casadi-sins {args.command}"
     try:
         with _termination_handled(), _reader_may_leave(), _warnings_in_our_words(), \

@@ -21,7 +21,9 @@ from ..core.version import software_versions
 from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
-from ..data.description import MAX_NAME, description_toml, read_recording
+from ..model.noise import NOISE_CEILINGS
+from ..core.errors import InputError
+from ..data.description import MAX_NAME, description_from_text, description_toml, read_recording
 from ..data.problem import load_problem
 from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
@@ -107,6 +109,7 @@ def cmd_segment(args) -> int:
     """``segment``: find the schedule of a CSV and write its description."""
     data = Path(args.data)
     check_site_options(args.latitude, args.height)
+    check_rate_option(args.rate)
     name = check_name_option(args.name or Path(args.out).stem)
     time_, pulses = read_samples(data, args.rate)
     site = Site(np.radians(args.latitude), args.height, args.gravity)
@@ -115,7 +118,12 @@ def cmd_segment(args) -> int:
     except ValueError as exc:
         raise CliError(f"{data}: {exc}") from None
     out = Path(args.out)
-    atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
+    text = description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent)))
+    try:  # what the reader would refuse (a --gravity off the Earth) is never written
+        description_from_text(text.encode("utf-8"), out)
+    except InputError as exc:
+        raise CliError(f"not written, the reader would refuse it: {exc}") from None
+    atomic_write_text(out, text)
     for note in notes:
         print(f"note: {note}")
     print(recording_summary(rec))
@@ -128,6 +136,12 @@ def check_site_options(latitude: float, height: float) -> None:
     if not -90.0 <= latitude <= 90.0 or not -500.0 <= height <= 10000.0:  # false for nan
         raise CliError(f"--latitude must be within -90..90 deg and --height within -500..10000 m, found "
                        f"{latitude:g} and {height:g}")
+
+
+def check_rate_option(rate: float | None) -> None:
+    """``--rate`` as a recording description accepts it (None: not given)."""
+    if rate is not None and not 1.0 <= rate <= 1e5:
+        raise CliError(f"--rate must be between 1 and 100000 Hz, found {rate:g}")
 
 
 def check_name_option(name: str) -> str:
@@ -229,6 +243,11 @@ def cmd_analyze(args) -> int:
         raise CliError("--accel-noise-ug and --gyro-noise-deg-h (white noise per sample) are gone: give the densities "
                        "as calibrate's --noise datasheet does, --accel-vrw-ug-rthz (ug/sqrt(Hz)) and "
                        "--gyro-arw-deg-rth (deg/sqrt(h)); per-sample sigma = density x sqrt(rate)")
+    for key in ("accel_vrw_ug_rthz", "gyro_arw_deg_rth"):
+        value = getattr(args, key)
+        if value is not None and not 0 < value <= NOISE_CEILINGS[key]:
+            raise CliError(f"--{key.replace('_', '-')} must be a positive density of at most {NOISE_CEILINGS[key]:g} "
+                           f"(beyond any inertial sensor), found {value:g}")
     predictions = []
     for path in args.inputs:
         t0 = time.perf_counter()

@@ -79,7 +79,7 @@ def cmd_design(args) -> int:
     if args.scheme:
         from ..studies.modulation.schemes import load_scheme
         scheme = load_scheme(args.scheme)
-    limits = Limits(total_s=args.total_s, max_rate_deg_s=args.max_rate_deg_s or default_rate(base),
+    limits = Limits(total_s=args.total_s, max_rate_deg_s=default_rate(base) if args.max_rate_deg_s is None else args.max_rate_deg_s,
                     min_rest_s=args.min_rest_s, first_rest_s=args.first_rest_s, handling_s=args.handling_s,
                     angles=args.angles, table_axes=args.table_axes, profile=base.timing.rate_profile)
     try:

@@ -15,7 +15,7 @@ from ..core.earth import Site
 from ..core.errors import InputError
 from ..data.description import as_read, read_description, write_recording
 from ..data.importers import FORMATS, KEYS, import_samples, imported_recording, parse_map
-from .commands import CliError, check_name_option, check_site_options
+from .commands import CliError, check_name_option, check_rate_option, check_site_options
 
 
 def add_import_parser(sub) -> None:
@@ -42,8 +42,7 @@ def cmd_import(args) -> int:
     out = Path(args.out)
     name = check_name_option(args.name or out.stem)
     check_site_options(0.0 if args.latitude is None else args.latitude, args.height)
-    if args.rate is not None and not 1.0 <= args.rate <= 1e5:  # false for nan
-        raise CliError(f"--rate must be between 1 and 100000 Hz, found {args.rate:g}")
+    check_rate_option(args.rate)
     names = parse_map(args.map)
     time, pulses, temperature = import_samples(args.kind, args.src, names)
     template = read_description(args.segments) if args.segments else None

@@ -50,7 +50,7 @@ def check_limits(limits: Limits) -> None:
     need += (groups - 1) * limits.handling_s
     if limits.total_s < need:
         raise DesignError(f"--total-s {limits.total_s:g} s is too short: a {limits.table_axes}-axis table needs at "
-                          f"least {need:.0f} s for its shortest usable schedule ({groups} group(s) of a first rest "
+                          f"least {need:.4g} s for its shortest usable schedule ({groups} group(s) of a first rest "
                           f"of {max(limits.first_rest_s, limits.min_rest_s):g} s, one turn of {smallest} deg at "
                           f"{limits.max_rate_deg_s:g} deg/s and a rest of {limits.min_rest_s:g} s, handling "
                           f"{limits.handling_s:g} s)")

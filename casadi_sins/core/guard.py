@@ -89,22 +89,8 @@ def check_output_target(path) -> None:
     OutputError
         One line naming ``path`` (and the input it would overwrite).
     """
-    path = Path(path)
-    if not os.path.lexists(path):
-        return
-    try:
-        info = os.stat(path)
-    except OSError:
-        return  # a dangling link: replacing the link loses nothing
-    if stat.S_ISDIR(info.st_mode):
-        raise OutputError(f"{path}: is a folder, not a file to write")
-    if not stat.S_ISREG(info.st_mode):
-        raise OutputError(f"{path}: is not a regular file (a device, FIFO or socket, or a link to one): refusing "
-                          "to replace it")
-    role = input_role(path)
-    if role is not None:
-        raise OutputError(f"{path}: is an input of this command{f' ({role})' if role else ''}: refusing to write "
-                          "over it; choose another output name")
+    if _existing_file(path, "replace it") is not None:
+        _refuse_input(path, "refusing to write over it")
 
 
 def check_removable(path) -> bool:
@@ -116,18 +102,34 @@ def check_removable(path) -> bool:
     OutputError
         One line naming ``path`` (and the input it is).
     """
+    found = _existing_file(path, "remove it")
+    if found is None:
+        return False
+    if found:  # a dangling link needs no check: removing the link loses nothing
+        _refuse_input(path, "also a file this command writes or replaces: refusing to remove it")
+    return True
+
+
+def _existing_file(path, doing: str) -> bool | None:
+    """None when ``path`` does not exist, False for a dangling link, True for a regular file; anything else (a
+    folder, a device, a FIFO, a socket, a link to one) is refused, naming what would be done to it."""
     path = Path(path)
     if not os.path.lexists(path):
-        return False
+        return None
     try:
         info = os.stat(path)
     except OSError:
-        return True  # a dangling link: removing the link loses nothing
+        return False
+    if stat.S_ISDIR(info.st_mode):
+        raise OutputError(f"{path}: is a folder, not a file to write: refusing to {doing}")
     if not stat.S_ISREG(info.st_mode):
-        raise OutputError(f"{path}: would be replaced by this run's outputs but is not a regular file (a folder, "
-                          "device, FIFO or socket): refusing to remove it; move it away or choose another output name")
+        raise OutputError(f"{path}: is not a regular file (a device, FIFO or socket, or a link to one): refusing to "
+                          f"{doing}")
+    return True
+
+
+def _refuse_input(path, what: str) -> None:
     role = input_role(path)
     if role is not None:
-        raise OutputError(f"{path}: is an input of this command{f' ({role})' if role else ''} and also a file this "
-                          "command writes or replaces: refusing to remove it; choose another output name")
-    return True
+        raise OutputError(f"{path}: is an input of this command{f' ({role})' if role else ''}: {what}; choose "
+                          "another output name")

@@ -69,7 +69,7 @@ def test_a_folder_or_a_device_in_the_set_is_refused_not_removed(tmp_path):
     folder = tmp_path / "SN.report.md"
     folder.mkdir()
     with guarded_inputs():
-        with pytest.raises(OutputError, match="not a regular file"):
+        with pytest.raises(OutputError, match="is a folder.*refusing to remove it"):
             write_files({}, stale=[folder])
         link = tmp_path / "SN.clbt.m"
         link.symlink_to(os.devnull)

@@ -88,32 +88,3 @@ def test_a_held_signal_reaches_the_handler_in_place_afterwards():
         assert seen == [signal.SIGTERM]
     finally:
         signal.signal(signal.SIGTERM, previous)
-
-
-def running_in_session(session: int) -> list[str]:
-    """The processes of a session still running after a few seconds (an ended one, a zombie its new parent
-    has not reaped yet, does not count)."""
-    for _ in range(10):
-        listing = subprocess.run(["ps", "-s", str(session), "-o", "pid=,stat="], capture_output=True, text=True).stdout
-        left = [line.split()[0] for line in listing.splitlines() if line.split() and not line.split()[1].startswith("Z")]
-        if not left:
-            return []
-        time.sleep(0.5)
-    return left
-
-
-def test_a_held_signal_reaches_the_handler_in_place_afterwards():
-    from casadi_sins.core.signals import hold_signals, release_signals
-
-    held = hold_signals()
-    signal.raise_signal(signal.SIGTERM)  # recorded, not delivered: the process would end here
-    seen = []
-    previous = signal.signal(signal.SIGTERM, lambda *a: seen.append("late"))  # noqa: F841 (replaced back below)
-    signal.signal(signal.SIGTERM, previous)
-    original = held[1][signal.SIGTERM]
-    held[1][signal.SIGTERM] = lambda signum, frame: seen.append(signum)
-    try:
-        release_signals(held)
-    finally:
-        signal.signal(signal.SIGTERM, original if original is not None else signal.SIG_DFL)
-    assert seen == [signal.SIGTERM]

@@ -27,8 +27,9 @@ def command_inputs(args) -> list:
 
 
 def recording_inputs(path) -> list:
-    """A file and, when it is a recording description, the data file it names (as ``(path, role)``)."""
-    return [str(path), *_described_data(Path(path))]
+    """A file and, when it is a recording description, the data file it names (as ``(path, role)``); nothing is
+    read from anything but a regular file (a FIFO named ``x.toml`` would never end)."""
+    return [str(path), *(_described_data(Path(path)) if _is_file(path) else [])]
 
 
 def _is_file(path) -> bool:

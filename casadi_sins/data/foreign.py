@@ -34,6 +34,9 @@ MAT_NUMERIC = {"double", "single", "int8", "uint8", "int16", "uint16", "int32", 
                "logical"}
 #: Soft links followed one after the other before an HDF5 path is taken for a loop.
 MAX_LINKS = 16
+#: The largest HDF5 chunk read (bytes): a few kB of zeros compressed into one chunk of 2 GB would otherwise be
+#: decompressed whole to read its first row (HDF5's own writers chunk by kB to MB).
+MAX_CHUNK_BYTES = 64e6
 
 
 def module(name: str):
@@ -218,6 +221,11 @@ class Hdf5Source(Source):
                 raise InputError(self.path, f"{name!r} holds {fault}, not an array of real numbers")
             if not item.shape or 0 in item.shape:
                 raise InputError(self.path, f"{name!r} has shape {item.shape}: no samples")
+            chunk = float(np.prod(item.chunks or (1,), dtype=float)) * item.dtype.itemsize
+            if chunk > MAX_CHUNK_BYTES:
+                raise InputError(self.path, f"{name!r} is stored in chunks of {chunk / 1e6:.3g} MB: reading any row "
+                                 f"would decompress a whole chunk (at most {MAX_CHUNK_BYTES / 1e6:g} MB); rewrite it "
+                                 "with smaller chunks")
         self._datasets[name] = item
         return item
 

@@ -119,3 +119,14 @@ def test_calibrate_onto_an_input_of_its_output_set_is_refused_before_computing(u
     cli_keeps_inputs(["calibrate", toml, "--out", tmp_path / "P.csv", "--noise", noise], [toml, data, noise], 2,
                      "P.compensation.json", "input of this command")
     assert not (tmp_path / "P.csv").exists()
+
+
+def test_a_fifo_named_toml_in_a_batch_folder_is_a_failed_unit_not_a_hang(unit, tmp_path, cli_keeps_inputs):
+    import os
+
+    toml, data = place(unit, tmp_path / "recs")
+    os.mkfifo(tmp_path / "recs" / "x.toml")
+    cli_keeps_inputs(["batch", tmp_path / "recs", "--out", tmp_path / "out", "--workers", "1", "--quiet"],
+                     [toml, data], 2, lines=0)
+    fleet = pd.read_csv(tmp_path / "out" / "fleet.csv", keep_default_na=False).set_index("unit_id")
+    assert "not a regular file" in fleet.loc["x", "message"]

@@ -230,3 +230,19 @@ def test_a_declared_size_that_fits_is_still_judged_on_the_first_block(tmp_path, 
     finally:
         tracemalloc.stop()
     assert peak < 200e6
+
+
+def test_an_hdf5_chunk_too_large_to_decompress_is_refused_before_reading(tmp_path, monkeypatch):
+    """A few MB of zeros compressed into one chunk of 800 MB: any row would need the whole chunk in memory."""
+    from casadi_sins.core import inputs
+    from casadi_sins.core.errors import InputError
+    from casadi_sins.data.importers import import_samples
+
+    h5py = pytest.importorskip("h5py")
+    src = tmp_path / "chunk.h5"
+    with h5py.File(src, "w") as handle:
+        for key in KEYS:
+            handle.create_dataset(key, shape=(100_000_000,), dtype="f8", chunks=(100_000_000,), compression="gzip")
+    monkeypatch.setattr(inputs, "memory_available", lambda: 1e15)  # the declared size passes: the chunk decides
+    with pytest.raises(InputError, match="chunks of 800 MB"):
+        import_samples("hdf5", src)

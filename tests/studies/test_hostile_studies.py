@@ -116,3 +116,12 @@ def test_a_recording_dated_9999_is_refused_when_read(short_problem, tmp_path, cl
     toml = tmp_path / "d.toml"
     toml.write_text(toml.read_text() + '\n[conditions]\ndate = "9999-12-31"\n')
     cli_keeps_inputs(["validate", toml], [toml, tmp_path / "d.csv"], 2, "[conditions] date", "years 1970 to 2199")
+
+
+def test_a_problem_too_long_to_simulate_is_refused_before_allocating(problem, tmp_path, cli_keeps_inputs):
+    """A 2 kB problem file asking for 6e8 samples (the reader's own limit is 1e9): one line naming the memory."""
+    problem.write_text(problem.read_text().replace("static_s = 100.0", "static_s = 500000.0"))
+    started = time.perf_counter()
+    for command in (["simulate", problem], ["analyze", problem]):
+        cli_keeps_inputs([*command, "--out", tmp_path / "o"], [problem], 2, "6e+08 samples", "GB of memory")
+    assert time.perf_counter() - started < 20.0 and not (tmp_path / "o").exists()

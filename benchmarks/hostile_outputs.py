@@ -491,7 +491,7 @@ def worker_signals(folder, toml, csv, rng, outcome):
                              text=True, start_new_session=True)
     if child.stderr.readline().strip() != "ready":
         outcome["traceback"] = 1
-    time.sleep(rng.uniform(0.0, 12.0))
+    time.sleep(rng.uniform(0.0, 6.0))  # a batch of two short units takes 5-15 s after the import
     with contextlib.suppress(ProcessLookupError):
         child.send_signal(sig)
     try:

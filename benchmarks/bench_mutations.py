@@ -21,6 +21,12 @@ compression bombs (and one of 1 GB of rows in a child process, its peak memory m
 link outputs, formula names, outputs onto inputs, degenerate tables; each through the command line,
 refusals expected (one line, exit 2), inputs byte-identical and nothing written.
 
+Issue 35 adds the classes of :mod:`hostile_outputs`: batch over folders whose recordings collide with its
+outputs, inputs named or linked as files a run owns and would remove, other tools' files with hostile
+edits (``import``), small files declaring many rows (in a child, its peak memory measured), thermal
+setpoints too close to fit, and Ctrl-C or SIGTERM at a random moment of a batch on a Dask cluster or a
+process pool (in a child: its exit status, one line, no process left).
+
 Writes ``results/mutations.{csv,md}`` (one row per mutation class) and prints the totals.
 """
 
@@ -52,6 +58,9 @@ _spec.loader.exec_module(mutations)
 _spec = importlib.util.spec_from_file_location("hostile", Path(__file__).resolve().parent / "hostile.py")
 hostile = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(hostile)
+_spec = importlib.util.spec_from_file_location("hostile_outputs", Path(__file__).resolve().parent / "hostile_outputs.py")
+hostile_outputs = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(hostile_outputs)
 
 
 class Hang(Exception):
@@ -109,6 +118,11 @@ def main_benchmark():
     parser.add_argument("--toml-seeds", type=int, default=25, help="seeds per TOML edit (default 25)")
     parser.add_argument("--calibrate-every", type=int, default=25, help="calibrate every n-th accepted case")
     parser.add_argument("--hostile-seeds", type=int, default=100, help="seeds per hostile class (default 100)")
+    parser.add_argument("--outputs-seeds", type=int, default=100, help="seeds per issue-35 class run in this process "
+                        "(folder-expansion outputs, cleanup over inputs, import edge files, near-coincident "
+                        "temperatures; default 100)")
+    parser.add_argument("--child-seeds", type=int, default=20, help="seeds per issue-35 class run in a child process "
+                        "(declared-size bombs, worker signals; default 20)")
     parser.add_argument("--bomb-gb", type=float, default=1.0, help="rows of the big gzip bomb, GB (0: none)")
     parser.add_argument("--out", default=str(ROOT / "results"), help="folder of the results tables")
     args = parser.parse_args()
@@ -124,6 +138,8 @@ def main_benchmark():
         cases = [("csv " + kind, seed) for kind in sorted(mutations.CSV_MUTATIONS) for seed in range(args.seeds)]
         cases += [(f"toml edit {i}", seed) for i in range(len(mutations.TOML_EDITS)) for seed in range(args.toml_seeds)]
         cases += [(kind, seed) for kind in hostile.CLASSES for seed in range(args.hostile_seeds)]
+        cases += [(kind, seed) for kind in hostile_outputs.CLASSES for seed in range(args.outputs_seeds)]
+        cases += [(kind, seed) for kind in hostile_outputs.CHILD_CLASSES for seed in range(args.child_seeds)]
         if args.bomb_gb > 0:
             rows.append({"class": f"gzip bomb {args.bomb_gb:g} GB of rows",
                          **hostile.big_bomb(Path(tmp) / "bomb", toml, csv, args.bomb_gb)})
@@ -132,6 +148,9 @@ def main_benchmark():
             folder.mkdir()
             if kind in hostile.CLASSES:
                 rows.append({"class": kind, **hostile.run(kind, folder, toml, csv, seed)})
+                continue
+            if kind in hostile_outputs.RUNNERS:
+                rows.append({"class": kind, **hostile_outputs.run(kind, folder, toml, csv, seed)})
                 continue
             if kind.startswith("csv "):
                 case_toml, case_csv = toml, mutations.mutate_csv(csv, kind[4:], seed)

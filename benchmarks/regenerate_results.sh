@@ -27,7 +27,7 @@ python benchmarks/bench_segmentation.py --seeds 3 --out "$out"                 #
 python benchmarks/bench_hand.py --runs 3 --out "$out"                          # sessions by hand, IMU-TK's session (issue 37), ~10 min
 python benchmarks/bench_edges.py --runs 50 --out "$out" | tee "$out/edges-benchmark.txt"   # issue 16's worlds, no datasheet
 python benchmarks/bench_batch.py --units 12 --out "$out" | tee "$out/batch-dask.txt"       # Dask: 1 worker against 2
-python benchmarks/bench_mutations.py --seeds 250 --toml-seeds 30 --hostile-seeds 160 --out "$out"  # hostile input (issues 17, 24): 5,031 cases, ~20 min
+python benchmarks/bench_mutations.py --seeds 250 --toml-seeds 30 --hostile-seeds 160 --outputs-seeds 160 --child-seeds 40 --out "$out"  # hostile input (issues 17, 24, 35): 5,501 cases, about an hour
 python benchmarks/bench_thermal.py --seeds 1 2 3 --out "$out" | tee "$out/thermal-benchmark.txt"   # thermal model, a setpoint left out (issue 30), ~6 min
 casadi-sins design problems/kang2013.toml --total-s 1290 --verify 20 --out "$out/design-kang2013"           # schedule design (issue 29)
 casadi-sins design problems/kang2013.toml --total-s 1290 --criterion navigation --scheme dual-axis-16 --hours 24 --verify 20 --out "$out/design-kang2013-dual-axis-16"   # designed for a modulated INS

@@ -115,6 +115,8 @@ def _static_increments(rate_hz, seconds, white, quantization=0.0, sigma=0.0, tau
 def static_increments():
     """The independent generator of a recording at rest (:func:`_static_increments`)."""
     return _static_increments
+
+
 @pytest.fixture(scope="session")
 def hand_problem():
     """A short session by hand (problems/hand-mems.toml with 14 rests of 3-6 s, about 2 minutes): a MEMS unit, raw
@@ -135,3 +137,33 @@ def hand_sim_exact(hand_problem):
     """The same without sensor noise, tremor, settling or clock jitter (what the fits must recover exactly)."""
     hand = dataclasses.replace(hand_problem.hand, tremor_deg=0.0, tremor_mg=0.0, settle_deg=0.0, clock_jitter=0.0)
     return simulate(dataclasses.replace(hand_problem, hand=hand), seed=3, noise=False)
+
+
+@pytest.fixture()
+def cli_keeps_inputs(capsys):
+    """Run the command line on ``args``: its exit status is ``status``, standard error one line (no traceback)
+    holding every ``needle`` (for a failure, status 2; ``lines=0``: nothing, as a batch whose units failed
+    reports them in its fleet table), and every file of ``inputs`` still there with the same SHA-256.  Returns
+    the standard error.  ``cli_keeps_inputs(args, inputs, status=2, *needles, lines=1)``."""
+    import hashlib
+
+    from casadi_sins.cli import main
+
+    def digest(path):
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+    def run(args, inputs, status=2, *needles, lines=1):
+        before = {Path(p): digest(p) for p in inputs}
+        capsys.readouterr()
+        got = main([str(a) for a in args])
+        err = capsys.readouterr().err.strip()
+        assert got == status, (got, err)
+        assert "Traceback" not in err and "internal error" not in err, err
+        if status == 2:
+            assert len(err.splitlines()) == lines, err
+        for needle in needles:
+            assert needle in err, (needle, err)
+        assert {p: digest(p) for p in before} == before, "an input changed"
+        return err
+
+    return run

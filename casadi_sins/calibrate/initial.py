@@ -32,7 +32,7 @@ import warnings
 import numpy as np
 
 from ..core.earth import EARTH_RATE
-from ..core.errors import InputError
+from ..core.errors import Caution, InputError
 from ..core.orientation import parse_axis
 from ..data.handfit import BIAS_EARTH_RATIO, rough_values
 from ..data.handling import MAX_MISS_DEG, fit_session, rest_means, too_fast
@@ -113,7 +113,7 @@ def rough_parameters(rec: Recording) -> ParameterSet:
     if missing:
         warnings.warn(f"{rec.label}: no rotation about gyro axis {', '.join('xyz'[i] for i in missing)}; "
                       "its rough scale factor comes from the Earth-rate magnitude (about 1 % accurate)",
-                      stacklevel=2)
+                      Caution, stacklevel=2)
         means = _static_means(rec, rec.gyro)
         known = np.nansum((means * np.nan_to_num(gyro_scale)) ** 2, axis=1)
         rest = (EARTH_RATE * dt) ** 2 - known

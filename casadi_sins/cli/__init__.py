@@ -3,6 +3,9 @@
 Every failure is one line on standard error naming the file (and line) at fault, with exit status
 2; Ctrl-C prints ``interrupted`` (130), SIGTERM or SIGHUP ``terminated`` (143); nothing is left
 half-written (every command writes its outputs together) and no worker process outlives the command.
+Every input is registered as it is found (:mod:`core.guard`) and a command owns its output set
+(:mod:`cli.outputs`): the files of an earlier run it does not write again are removed with its writes,
+and no input is ever written over or removed.
 """
 
 from __future__ import annotations
@@ -12,17 +15,19 @@ import os
 import signal
 import sys
 import traceback
+import warnings
 
 from ..calibrate.result import CalibrationError
 from ..core import signals
-from ..core.errors import InputError, OutputError
+from ..core.errors import Caution, InputError, OutputError
+from ..core.files import check_writable, claim_outputs, gathered_writes
+from ..core.guard import guarded_inputs, last_input
 from ..core.signals import Terminated
-from ..core.files import check_writable, gathered_writes
-from ..core.guard import guarded_inputs
 from ..core.text import one_line
 from ..core.threads import single_threaded
 from .commands import CliError
 from .inputs import command_inputs
+from .outputs import command_outputs
 from .parser import build_parser
 
 #: Commands whose --out is a folder (the others write one file).
@@ -90,17 +95,37 @@ def _reader_may_leave():
         sys.stdout = previous
 
 
+@contextlib.contextmanager
+def _warnings_in_our_words():
+    """While a command runs, a warning of ours (:class:`~core.errors.Caution`) is one line ``warning: ...``
+    on standard error; the libraries' warnings (NumPy's RuntimeWarning on an overflow, matplotlib's, pandas')
+    are silenced: what they would mean reaches the user through our own checks and messages."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"warning: {one_line(message, 2000)}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        warnings.filterwarnings("default", category=Caution)
+        warnings.showwarning = show
+        yield
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``casadi-sins`` with ``argv``; returns the exit status (0; 2 for a failure told in one line; 130
     interrupted; 143 terminated)."""
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help, --version (0) or a bad argument, told in one line (2)
+        return exc.code if isinstance(exc.code, int) else 2
     name = f"casadi-sins {args.command}"
     try:
-        with _termination_handled(), _reader_may_leave(), guarded_inputs(command_inputs(args)):
+        with _termination_handled(), _reader_may_leave(), _warnings_in_our_words(), \
+                guarded_inputs(command_inputs(args)):
             if getattr(args, "out", None):
                 check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
             with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
                                      else gathered_writes()):
+                claim_outputs(command_outputs(args))  # what this run owns: never an input, before any computation
                 return args.func(args)
     except BaseException as exc:  # noqa: BLE001 (every outcome is one line and a status)
         return _outcome(name, exc)
@@ -121,7 +146,9 @@ def _outcome(name: str, exc: BaseException) -> int:
         print("interrupted", file=sys.stderr)
         return signals.INTERRUPTED
     except MemoryError:
-        return _fail(name, "not enough memory for this command (a larger machine, or a shorter recording)")
+        last = last_input()
+        return _fail(name, f"not enough memory{f' (last input read: {one_line(last, 300)})' if last else ''}: free "
+                     "memory, use a larger machine, or give this command less to do")
     except ImportError as exc:
         return _fail(name, f"cannot load {exc.name or 'a module'} ({one_line(exc)}): reinstall casadi-sins, or "
                      "free memory")

@@ -21,7 +21,9 @@ from ..core.version import software_versions
 from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
-from ..data.description import MAX_NAME, description_toml, read_description, read_recording
+from ..model.noise import NOISE_CEILINGS
+from ..core.errors import InputError
+from ..data.description import MAX_NAME, description_from_text, description_toml, read_description, read_recording
 from ..data.problem import load_problem
 from ..data.conditions import conditions_dict
 from ..data.samples import read_samples
@@ -113,16 +115,13 @@ def cmd_segment(args) -> int:
     if data.suffix.lower() == ".toml":  # a description without segments: its site, rate, conditions and samples
         head = read_description(data)
         site, rate, data = head["site"], args.rate or head["rate_hz"], data.parent / head["data"]
+    check_rate_option(args.rate)
     if args.latitude is not None or site is None:
         if args.latitude is None or rate is None:
             raise CliError("the samples of a CSV need --rate and --latitude (a description gives them)")
-        if not -90.0 <= args.latitude <= 90.0 or not -500.0 <= args.height <= 10000.0:
-            raise CliError("--latitude must be within -90..90 deg and --height within -500..10000 m")
+        check_site_options(args.latitude, args.height, args.gravity)
         site = Site(np.radians(args.latitude), args.height, args.gravity)
-    name = args.name or Path(args.out).stem
-    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
-        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
-                       f"{one_line(repr(name), 80)}")
+    name = check_name_option(args.name or Path(args.out).stem)
     time_, pulses = read_samples(data, rate)
     try:
         rec, notes = segment_recording(time_, pulses[:, :3], pulses[:, 3:], rate, site, name, args.min_static_s)
@@ -131,12 +130,41 @@ def cmd_segment(args) -> int:
     if head is not None:
         rec.conditions = head["conditions"]
     out = Path(args.out)
-    atomic_write_text(out, description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent))))
-    for text in notes:
-        note(text)
+    text = description_toml(rec, os.path.relpath(os.path.abspath(data), os.path.abspath(out.parent)))
+    try:  # what the reader would refuse (a --gravity off the Earth) is never written
+        description_from_text(text.encode("utf-8"), out)
+    except InputError as exc:
+        raise CliError(f"not written, the reader would refuse it: {exc}") from None
+    atomic_write_text(out, text)
+    for line in notes:
+        note(line)
     print(recording_summary(rec))
     print(f"wrote {out}: {plural(len(rec.segments), 'segment')} in {plural(len(rec.group_ids), 'group')}")
     return 0
+
+
+def check_site_options(latitude: float, height: float, gravity: float | None = None) -> None:
+    """``--latitude``, ``--height`` and ``--gravity`` (None: not given) as a recording description accepts
+    them (finite, on the ground, a gravity on Earth)."""
+    if not -90.0 <= latitude <= 90.0 or not -500.0 <= height <= 10000.0:  # false for nan
+        raise CliError(f"--latitude must be within -90..90 deg and --height within -500..10000 m, found "
+                       f"{latitude:g} and {height:g}")
+    if gravity is not None and not 9.7 < gravity < 9.9:
+        raise CliError(f"--gravity must be a gravity on Earth (9.7..9.9 m/s^2), found {gravity:g}")
+
+
+def check_rate_option(rate: float | None) -> None:
+    """``--rate`` as a recording description accepts it (None: not given)."""
+    if rate is not None and not 1.0 <= rate <= 1e5:
+        raise CliError(f"--rate must be between 1 and 100000 Hz, found {rate:g}")
+
+
+def check_name_option(name: str) -> str:
+    """A recording name (``--name``) as a recording description accepts it."""
+    if not name or len(name) > MAX_NAME or not name.isprintable():  # what read_recording accepts
+        raise CliError(f"--name must be one line of 1 to {MAX_NAME} printable characters, found "
+                       f"{one_line(repr(name), 80)}")
+    return name
 
 
 def cmd_export(args) -> int:
@@ -252,6 +280,11 @@ def cmd_analyze(args) -> int:
         raise CliError("--accel-noise-ug and --gyro-noise-deg-h (white noise per sample) are gone: give the densities "
                        "as calibrate's --noise datasheet does, --accel-vrw-ug-rthz (ug/sqrt(Hz)) and "
                        "--gyro-arw-deg-rth (deg/sqrt(h)); per-sample sigma = density x sqrt(rate)")
+    for key in ("accel_vrw_ug_rthz", "gyro_arw_deg_rth"):
+        value = getattr(args, key)
+        if value is not None and not 0 < value <= NOISE_CEILINGS[key]:
+            raise CliError(f"--{key.replace('_', '-')} must be a positive density of at most {NOISE_CEILINGS[key]:g} "
+                           f"(beyond any inertial sensor), found {value:g}")
     predictions = []
     for path in args.inputs:
         t0 = time.perf_counter()
@@ -268,6 +301,7 @@ def cmd_analyze(args) -> int:
 def cmd_montecarlo(args) -> int:
     """``montecarlo``: simulate and calibrate many seeds."""
     check_scheduler(args.dask)  # before any work or progress bar
+    MC.check_runs(args.runs)
     problem = load_problem(args.problem)
     predicted = predict_problem(problem).sigma_natural
     seeds = range(args.first_seed, args.first_seed + args.runs)

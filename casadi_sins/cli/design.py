@@ -69,6 +69,9 @@ def cmd_design(args) -> int:
     base = load_problem(args.problem)
     if args.evaluations < 1 or args.verify < 0 or not args.cap > 0 or not 0 < args.hours < float("inf"):
         raise CliError("--evaluations must be at least 1, --verify 0 or more, --cap and --hours positive")
+    if args.verify:
+        from ..studies.montecarlo import check_runs
+        check_runs(args.verify, "--verify")
     from ..studies.budget import MAX_HOURS
     if args.hours > MAX_HOURS:
         raise CliError(f"--hours {args.hours:g} is beyond {MAX_HOURS:g} h: the navigation criterion is propagated at "
@@ -79,7 +82,7 @@ def cmd_design(args) -> int:
     if args.scheme:
         from ..studies.modulation.schemes import load_scheme
         scheme = load_scheme(args.scheme)
-    limits = Limits(total_s=args.total_s, max_rate_deg_s=args.max_rate_deg_s or default_rate(base),
+    limits = Limits(total_s=args.total_s, max_rate_deg_s=default_rate(base) if args.max_rate_deg_s is None else args.max_rate_deg_s,
                     min_rest_s=args.min_rest_s, first_rest_s=args.first_rest_s, handling_s=args.handling_s,
                     angles=args.angles, table_axes=args.table_axes, profile=base.timing.rate_profile)
     try:

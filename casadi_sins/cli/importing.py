@@ -13,8 +13,9 @@ import numpy as np
 
 from ..core.earth import Site
 from ..core.errors import InputError
-from ..data.description import read_description, write_recording
+from ..data.description import as_read, read_description, write_recording
 from ..data.importers import FORMATS, KEYS, import_samples, imported_recording, parse_map
+from .commands import CliError, check_name_option, check_rate_option, check_site_options
 from .logs import note
 
 
@@ -37,18 +38,21 @@ def add_import_parser(sub) -> None:
 
 
 def cmd_import(args) -> int:
-    """``import``: read, build and validate the recording, then write it."""
+    """``import``: read, build and validate the recording, read it back in memory as the reader would once
+    written, then write it (a recording our own reader refuses is never written)."""
+    out = Path(args.out)
+    name = check_name_option(args.name or out.stem)
+    check_site_options(0.0 if args.latitude is None else args.latitude, args.height, args.gravity)
+    check_rate_option(args.rate)
     names = parse_map(args.map)
     time, pulses, temperature = import_samples(args.kind, args.src, names)
     template = read_description(args.segments) if args.segments else None
-    site = None
-    if template is None and args.latitude is not None:
-        if not -90.0 <= args.latitude <= 90.0:
-            raise InputError(None, "--latitude must be within -90..90 deg")
-        site = Site(np.radians(args.latitude), args.height)
-    out = Path(args.out)
-    rec, notes = imported_recording(time, pulses, temperature, args.name or out.stem, template, args.rate, site,
-                                    label=str(args.src))
+    site = Site(np.radians(args.latitude), args.height) if template is None and args.latitude is not None else None
+    rec, notes = imported_recording(time, pulses, temperature, name, template, args.rate, site, label=str(args.src))
+    try:
+        as_read(rec, out)
+    except InputError as exc:
+        raise CliError(f"{args.src}: imported, it would be a recording the reader refuses: {exc}") from None
     write_recording(rec, out)
     for text in notes:
         note(text)

@@ -22,9 +22,14 @@ def command_inputs(args) -> list:
             continue
         for item in value if isinstance(value, (list, tuple)) else [value]:
             if isinstance(item, (str, Path)) and str(item) and _is_file(item):
-                found.append(str(item))
-                found.extend(_described_data(Path(item)))
+                found.extend(recording_inputs(item))
     return found
+
+
+def recording_inputs(path) -> list:
+    """A file and, when it is a recording description, the data file it names (as ``(path, role)``); nothing is
+    read from anything but a regular file (a FIFO named ``x.toml`` would never end)."""
+    return [str(path), *(_described_data(Path(path)) if _is_file(path) else [])]
 
 
 def _is_file(path) -> bool:

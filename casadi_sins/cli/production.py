@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import io
 import math
+import sys
 import time
 from pathlib import Path
 
 from ..studies.parallel import check_scheduler
-from ..core.files import write_files
+from ..core.files import claim_outputs, write_files
+from ..core.guard import register_inputs
 from ..core.toml import read_toml
 from ..data.description import read_recording
 from ..data.segmentation import refine
@@ -22,12 +24,13 @@ from ..report.rounding import display, float_columns, format_sigma, format_with_
 from ..report.tables import frame_files
 from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
 from ..studies.apply import apply_files, check_display, table_with_covariance
-from ..studies.batch import BatchOptions, batch_files, run_batch, spread_frame, with_outliers
+from ..studies.batch import BatchOptions, batch_files, batch_outputs, run_batch, spread_frame, with_outliers
 from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
 from ..studies.navcheck import plot_navigation_check
 from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
+from .inputs import recording_inputs
 from .logs import note, progress_for
 from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
 
@@ -90,6 +93,7 @@ def cmd_batch(args) -> int:
     if args.tolerance:
         read_acceptance_sheet(args.tolerance)  # a bad sheet stops the batch before any unit
     recordings = batch_recordings(args.recordings)
+    claim_outputs(batch_outputs(args.out, recordings))  # before any unit: no output over a recording found
     options = BatchOptions(solver=args.solver, model=args.model, noise=args.noise,
                            tolerance=args.tolerance and str(Path(args.tolerance).resolve()),
                            certificate=args.certificate)
@@ -114,25 +118,31 @@ def cmd_batch(args) -> int:
 
 
 def batch_recordings(paths) -> list[str]:
-    """The recordings of ``batch``: files as given, and every recording description (``*.toml`` of format
-    sins-recording) in a folder given, in name order."""
+    """The recordings of ``batch``: files as given, and in a folder given every ``*.toml`` in name order that
+    is a recording description or cannot be read as TOML (it becomes a failed unit, never silently left
+    out); a TOML file of another kind (a problem file, a tolerance sheet) is named in a note and left out.
+    Each recording found, and the data file it names, is an input of the command (:mod:`core.guard`)."""
     out = []
     for path in map(Path, paths):
         if not path.is_dir():
             out.append(str(path))
             continue
-        found = [str(p) for p in sorted(path.glob("*.toml")) if _is_recording_quietly(p)]
+        found = []
+        for toml in sorted(path.glob("*.toml")):
+            try:
+                if not is_recording(toml):
+                    print(f"note: {toml}: not a recording description (no format = \"sins-recording/1\"): left "
+                          "out of the batch", file=sys.stderr)
+                    continue
+            except InputError:
+                pass  # unreadable: calibrated as a unit, which fails naming the fault
+            found.append(str(toml))
         if not found:
             raise CliError(f"{path}: no recording description (*.toml, format sins-recording/1) in the folder")
         out += found
+    for rec in out:
+        register_inputs(recording_inputs(rec))
     return out
-
-
-def _is_recording_quietly(path: Path) -> bool:
-    try:
-        return is_recording(path)
-    except InputError:
-        return False
 
 
 def is_recording(path) -> bool:

@@ -23,6 +23,7 @@ import functools
 import hashlib
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -86,7 +87,7 @@ def _compile(source: str, library: Path) -> str | None:
     so_file = c_file[:-2] + ".so"
     try:
         Path(c_file).write_text(source)
-        done = subprocess.run([compiler, *CFLAGS, "-o", so_file, c_file], capture_output=True, text=True)
+        done = _run_compiler([compiler, *CFLAGS, "-o", so_file, c_file])
         if done.returncode:
             said = " ".join((done.stderr or done.stdout or "").split())[:200]
             return (f"compiling with {compiler} failed (exit status {done.returncode}"
@@ -99,6 +100,23 @@ def _compile(source: str, library: Path) -> str | None:
         for path in (c_file, so_file):
             if os.path.exists(path):
                 os.remove(path)
+
+
+def _run_compiler(command: list[str]) -> subprocess.CompletedProcess:
+    """Run the C compiler in a session of its own (the terminal's Ctrl-C is this process's to handle); when
+    this process is interrupted, the compiler and the programs it started (cc1, as) are killed with it."""
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    try:
+        out, err = process.communicate()
+    except BaseException:
+        try:
+            os.killpg(process.pid, signal.SIGKILL)
+        except OSError:
+            pass
+        process.wait()
+        raise
+    return subprocess.CompletedProcess(command, process.returncode, out, err)
 
 
 def _generate(functions: list[ca.Function], tag: str) -> str:

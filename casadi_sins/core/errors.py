@@ -45,3 +45,8 @@ class InputError(ValueError):
 
 class OutputError(OSError):
     """An output location that cannot be written; the message names it."""
+
+
+class Caution(UserWarning):
+    """A warning of ours for the user (``warnings.warn(..., Caution)``): the command line prints it as one line
+    ``warning: ...``; the libraries' own warnings are silenced there."""

@@ -2,7 +2,8 @@
 
 A FIFO, a device (``/dev/zero``), a folder, a symlink loop or a dangling link are named and refused
 before anything is read; a file larger than the memory it would need is refused before reading;
-compressed files (``.gz``, ``.bz2``, ``.xz``, ``.zip``) are opened as such.
+compressed files (``.gz``, ``.bz2``, ``.xz``, ``.zip``) are opened as such.  Every file checked here is
+an input of the running command (:func:`core.guard.register_input`): no output lands on it.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import zipfile
 from pathlib import Path
 
 from .errors import InputError
+from .guard import register_input
 
 #: Typical growth of a CSV of pulses in memory while it is parsed (text -> float64 columns and copies).
 CSV_MEMORY_FACTOR = 3.0
@@ -27,7 +29,8 @@ COMPRESSED = (".gz", ".bz2", ".xz", ".zip")
 
 
 def check_input_file(path: str | Path, what: str, max_bytes: int | None = None) -> int:
-    """Refuse anything but a readable regular file; return its size in bytes.
+    """Refuse anything but a readable regular file; return its size in bytes.  The file becomes an input of
+    the running command (:mod:`core.guard`): nothing is written over it or removed.
 
     Raises
     ------
@@ -49,6 +52,7 @@ def check_input_file(path: str | Path, what: str, max_bytes: int | None = None) 
         raise InputError(path, f"is not a regular file (a pipe, device or socket), not a {what}")
     if not os.access(path, os.R_OK):
         raise InputError(path, "is not readable (permission denied)")
+    register_input(path, f"read as a {what.split(' (')[0]}")
     if max_bytes is not None and info.st_size > max_bytes:
         raise InputError(path, f"is {info.st_size / 1e6:.3g} MB, more than a {what} can be "
                          f"({max_bytes / 1e6:.3g} MB)")
@@ -105,9 +109,10 @@ def open_binary(path: str | Path):
     return open(path, "rb")
 
 
-def first_line(path: str | Path, limit: int = 1 << 20) -> str:
-    """The first line of a (possibly compressed) text file, at most ``limit`` bytes, decoded as UTF-8."""
-    with open_binary(path) as handle:
+def first_line(path: str | Path, limit: int = 1 << 20, opener=None) -> str:
+    """The first line of a (possibly compressed) text file, at most ``limit`` bytes, decoded as UTF-8
+    (``opener``: a function returning the binary file object to read instead, ``path`` naming it)."""
+    with (opener or (lambda: open_binary(path)))() as handle:
         raw = handle.readline(limit)
     if len(raw) >= limit and not raw.endswith(b"\n"):
         raise InputError(path, f"the first line is longer than {limit} bytes: not a CSV header", line=1)

@@ -46,6 +46,12 @@ def read_toml_text(path: str | Path, what: str) -> tuple[dict, str]:
         raw = path.read_bytes()
     except OSError as exc:
         raise InputError(path, f"cannot be read ({exc.strerror or exc})") from None
+    return toml_from_bytes(raw, path, what)
+
+
+def toml_from_bytes(raw: bytes, path: str | Path, what: str) -> tuple[dict, str]:
+    """The dictionary and text of TOML bytes, checked as :func:`read_toml_text` checks a file (``path``
+    names them in messages)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -97,9 +97,22 @@ def parse_date(value) -> datetime.datetime:
     return moment if moment.tzinfo is not None else moment.replace(tzinfo=datetime.timezone.utc)
 
 
+#: The years of a recording or a calibration (``[first, last)``): a date outside is a typing error (and
+#: 9999-12-31 overflows date arithmetic and every plot's date axis).
+DATE_YEARS = (1970, 2200)
+
+
+def check_year(moment: datetime.datetime) -> None:
+    """Refuse (ValueError) a date outside :data:`DATE_YEARS`."""
+    first, last = DATE_YEARS
+    if not first <= moment.year < last:
+        raise ValueError(f"{moment.date().isoformat()} is not a date of a recording (years {first} to {last - 1})")
+
+
 def _normalised_date(value) -> str:
     """The text form of a date: ``YYYY-MM-DD`` for a date alone, else to the second with the zone if given."""
     moment, date_only = _moment(value)
+    check_year(moment)
     return moment.date().isoformat() if date_only else moment.isoformat(timespec="seconds")
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..core.errors import InputError, shown
 from ..core.toml import read_toml
-from ..model.noise import NOISE_KEYS, SensorNoise
+from ..model.noise import NOISE_CEILINGS, NOISE_KEYS, SensorNoise
 
 #: What each key is, for the comments of a written datasheet.
 KEY_NOTES = {
@@ -61,6 +61,9 @@ def read_datasheet(path: str | Path) -> SensorNoise:
                 or (key.endswith("_tau_s") and min(values) <= 0) or (len(values) == 3 and "bias" in key)):
             raise InputError(path, f"{key} must be a non-negative number (or 3 for the white and quantization "
                              f"terms), found {shown(value)}")
+        if max(values) > NOISE_CEILINGS[key]:
+            raise InputError(path, f"{key} {max(values):g} is beyond any inertial sensor (at most "
+                             f"{NOISE_CEILINGS[key]:g}): check the unit")
     return SensorNoise.from_natural(doc)
 
 

@@ -37,12 +37,12 @@ import numpy as np
 
 from ..core import orientation as orient
 from ..core.earth import Site
-from ..core.errors import InputError, shown
+from ..core.errors import InputError, OutputError, shown
 from ..core.files import write_files
-from ..core.toml import array_table_lines, read_toml_text
+from ..core.toml import array_table_lines, read_toml_text, toml_from_bytes
 from .conditions import TEMPERATURE_RANGE_C, parse_conditions
 from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
-from .samples import REFERENCE_COLUMNS, read_samples, samples_writer
+from .samples import REFERENCE_COLUMNS, read_samples, samples_as_read, samples_writer
 
 
 #: The longest recording name (it becomes file names and report titles).
@@ -64,10 +64,17 @@ def read_recording(path: str | Path) -> Recording:
     data_path = path.parent / head["data"]
     time, pulses, temperature, reference = read_samples(data_path, head["rate_hz"], with_temperature=True,
                                                         with_reference=True)
+    return _checked_recording(head, (time, pulses, temperature, reference), data_path, path, source=path)
+
+
+def _checked_recording(head: dict, samples: tuple, data_path: Path, path: Path, source) -> Recording:
+    """The recording of a description (``path``) and its samples as read (``(time, pulses, temperature,
+    reference)`` from ``data_path``), with every check of the format; ``source`` is the recording's source."""
+    time, pulses, temperature, reference = samples
     _check_temperature(temperature, data_path)
     _check_reference(reference, data_path)
     rec = Recording(name=head["name"], site=head["site"], rate_hz=head["rate_hz"], segments=head["segments"],
-                    time=time, gyro=pulses[:, :3], accel=pulses[:, 3:], source=path, warnings=head["warnings"],
+                    time=time, gyro=pulses[:, :3], accel=pulses[:, 3:], source=source, warnings=head["warnings"],
                     conditions=head["conditions"], temperature=temperature,
                     reference=None if reference is None else np.radians(reference))
     rate_warning = check_rate(time, head["rate_hz"], data_path)
@@ -87,12 +94,42 @@ def read_recording(path: str | Path) -> Recording:
     return rec
 
 
+def as_read(rec: Recording, toml_path: str | Path) -> Recording:
+    """``rec`` as :func:`read_recording` would read it back once written as ``toml_path`` (and its CSV): the
+    description and the samples are made in memory (a chunk of the CSV at a time) and go through the same
+    readers and checks, so that a recording is written only when it can be read.  Nothing is written.
+
+    Raises
+    ------
+    InputError
+        What the reader would refuse, naming the file to be written (and its line).
+    """
+    toml_path, csv_path = recording_paths(toml_path)
+    try:
+        text = description_toml(rec, csv_path.name)
+    except ValueError as exc:  # a number TOML cannot hold (nan, inf)
+        raise InputError(toml_path, str(exc)) from None
+    head = description_from_text(text.encode("utf-8"), toml_path)
+    return _checked_recording(head, samples_as_read(rec, csv_path), csv_path, toml_path, source=None)
+
+
 def read_description(path: str | Path, require_segments: bool = True) -> dict:
     """The description alone (no samples): ``name``, ``data``, ``site``, ``rate_hz``, ``segments``,
     ``conditions`` and ``warnings``; each problem an :class:`InputError` naming the file and line.
     Without ``require_segments`` a description with no ``[[segments]]`` has none (``noise``: all at rest)."""
     path = Path(path)
     doc, text = read_toml_text(path, "recording description")
+    return _description(doc, text, path, require_segments)
+
+
+def description_from_text(raw: bytes, path: str | Path) -> dict:
+    """:func:`read_description` of a description's bytes made in memory (``path`` names them in messages)."""
+    doc, text = toml_from_bytes(raw, path, "recording description")
+    return _description(doc, text, Path(path))
+
+
+def _description(doc: dict, text: str, path: Path, require_segments: bool = True) -> dict:
+    """The checked content of a description's TOML (:func:`read_description`)."""
     if doc.get("format") != FORMAT:
         raise InputError(path, f"format must be {FORMAT!r}, found {shown(doc.get('format'))}")
     name = _require(doc, "name", str, path)
@@ -276,10 +313,25 @@ def description_toml(rec: Recording, data_name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def recording_paths(toml_path: str | Path) -> list[Path]:
+    """``[NAME.toml, NAME.csv]``: the description to write and its samples beside it.
+
+    Raises
+    ------
+    OutputError
+        When ``toml_path`` is not a ``.toml`` name (``rec.csv`` would be the description and the samples at
+        once).
+    """
+    toml_path = Path(toml_path)
+    if toml_path.suffix.lower() != ".toml":
+        raise OutputError(f"{toml_path}: a recording is written as a description NAME.toml with its samples "
+                          "NAME.csv beside it; give the description's name (NAME.toml)")
+    return [toml_path, toml_path.with_suffix(".csv")]
+
+
 def recording_files(rec: Recording, toml_path: str | Path) -> dict:
     """``{path: content}`` of a recording: ``NAME.toml`` and its CSV (same stem), for :func:`write_files`."""
-    toml_path = Path(toml_path)
-    csv_path = toml_path.with_suffix(".csv")
+    toml_path, csv_path = recording_paths(toml_path)
     return {csv_path: samples_writer(rec), toml_path: description_toml(rec, csv_path.name).encode("utf-8")}
 
 

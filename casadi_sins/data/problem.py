@@ -35,6 +35,7 @@ from ..core.errors import InputError, shown
 from ..core.files import safe_stem
 from ..core.toml import read_toml
 from ..core.units import TO_SI
+from ..model.noise import NOISE_CEILINGS
 from ..model.parameters import ParameterSet
 from ..model.registry import is_known, unit_of
 from .handplan import HandPlan, read_hand_plan
@@ -47,6 +48,8 @@ HANDLINGS = ("turn", "minimum-jerk")
 
 #: Most samples a problem's schedule may have (about 3 h at 100 kHz; a longer one fails only for memory).
 MAX_SAMPLES = 1e9
+#: The largest departures from nominal a bench could make (the noise terms: model.noise.NOISE_CEILINGS).
+DEVIATION_CEILINGS = {"start_attitude_deg": 180.0, "rotation_rate_factor": 1.0, "cross_axis_rate": 1.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,6 +313,10 @@ class _Reader:
         result = self.number({key: value}, key, "errors")
         if result < 0.0 or (key.endswith("_tau_s") and result == 0.0):
             raise self.fail(f"[errors] {key} must be positive")
+        ceiling = NOISE_CEILINGS.get(key, DEVIATION_CEILINGS.get(key))
+        if ceiling is not None and result > ceiling:
+            raise self.fail(f"[errors] {key} {result:g} is beyond any inertial sensor or turntable (at most "
+                            f"{ceiling:g}): check the unit")
         return result
 
     def deviations(self) -> Deviations:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import functools
 import math
 import io
 import warnings
@@ -42,13 +43,15 @@ MAX_PULSE = 2.0**53
 DATA_FILE = "data file (the CSV of samples that 'data' must name)"
 
 
-def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False, with_reference: bool = False
-                 ) -> tuple:
+def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False, with_reference: bool = False,
+                 source=None) -> tuple:
     """Time and pulses of the CSV (``.gz``, ``.bz2``, ``.xz``, ``.zip`` are read as such).
 
     With ``with_temperature`` a third item: the ``temperature`` column (degC), or None without one; with
     ``with_reference`` (and ``with_temperature``) a fourth: the reference attitude columns
     (:data:`REFERENCE_COLUMNS`, (N, 3) deg), or None without them (all three, or none).
+    ``source`` (a function returning a binary file object) reads CSV bytes made in memory instead of the
+    file, exactly as the file would be read (``data_path`` then only names them in messages).
 
     The file is read block by block (:data:`BLOCK_BYTES`) and every block is checked before the next is
     read: exactly the header's number of fields in each row (a comma inside a number would shift the
@@ -62,10 +65,12 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
     InputError
         Naming the file, line and column of the first problem.
     """
-    size = check_input_file(data_path, DATA_FILE)
-    check_memory_for(data_path, size)
-    with _read_errors(data_path):
-        columns = _header(data_path)
+    if source is None:
+        size = check_input_file(data_path, DATA_FILE)
+        check_memory_for(data_path, size)
+        source = functools.partial(open_binary, data_path)
+    with _read_errors(data_path, source):
+        columns = _header(data_path, source)
         wanted = COLUMNS + ((TEMPERATURE_COLUMN,) if with_temperature and TEMPERATURE_COLUMN in columns else ())
         given = [c for c in REFERENCE_COLUMNS if c in columns]
         if with_reference and given and len(given) < len(REFERENCE_COLUMNS):
@@ -73,7 +78,7 @@ def read_samples(data_path: Path, rate_hz: float, with_temperature: bool = False
                              f"only {', '.join(given)}", line=1)
         reference = with_reference and len(given) == len(REFERENCE_COLUMNS)
         wanted = wanted + (REFERENCE_COLUMNS if reference else ())
-        values = _stream(data_path, columns, 1.0 / rate_hz, wanted)
+        values = _stream(data_path, columns, 1.0 / rate_hz, wanted, source)
     if len(values) < 2:
         raise InputError(data_path, "fewer than two samples")
     time, pulses = values[:, 0], values[:, 1:len(COLUMNS)]
@@ -100,14 +105,15 @@ def sample_blocks(data_path: Path, rate_hz: float):
     """
     data_path = Path(data_path)
     check_input_file(data_path, DATA_FILE)
-    with _read_errors(data_path):
-        columns = _header(data_path)
-        for _, values, text_bytes in _checked_blocks(data_path, columns, 1.0 / rate_hz):
+    source = functools.partial(open_binary, data_path)
+    with _read_errors(data_path, source):
+        columns = _header(data_path, source)
+        for _, values, text_bytes in _checked_blocks(data_path, columns, 1.0 / rate_hz, COLUMNS, source):
             yield values[:, 0], values[:, 1:len(COLUMNS)], text_bytes
 
 
 @contextlib.contextmanager
-def _read_errors(data_path: Path):
+def _read_errors(data_path: Path, source):
     """What goes wrong while reading the CSV, as an :class:`InputError` naming it."""
     try:
         yield
@@ -116,15 +122,15 @@ def _read_errors(data_path: Path):
     except MemoryError:
         raise InputError(data_path, "not enough memory to read it") from None
     except UnicodeDecodeError:
-        _raise_encoding_error(data_path)
+        _raise_encoding_error(data_path, source)
     except decompression_errors() as exc:
         raise InputError(data_path, f"cannot be read: truncated or corrupt ({exc.strerror or exc})"
                          if isinstance(exc, OSError) else f"cannot be read: truncated or corrupt ({exc})") from None
 
 
-def _header(data_path: Path) -> list[str]:
+def _header(data_path: Path, source) -> list[str]:
     """The header's column names (stripped), checked for the format's columns."""
-    line = first_line(data_path)
+    line = first_line(data_path, opener=source)
     columns = [c.strip() for c in next(csv.reader([line]), [])]
     if len(columns) > MAX_COLUMNS:
         raise InputError(data_path, f"the header has {len(columns)} columns, more than {MAX_COLUMNS}: not a CSV of "
@@ -139,9 +145,9 @@ def _header(data_path: Path) -> list[str]:
     return columns
 
 
-def _blocks(data_path: Path):
+def _blocks(data_path: Path, source):
     """``(first line number, bytes of whole lines)`` after the header, :data:`BLOCK_BYTES` at a time."""
-    with open_binary(data_path) as handle:
+    with source() as handle:
         handle.readline(MAX_LINE_BYTES)
         line, carry = 2, b""
         while True:
@@ -159,11 +165,11 @@ def _blocks(data_path: Path):
                 return
 
 
-def _stream(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS) -> np.ndarray:
+def _stream(data_path: Path, columns: list[str], dt: float, wanted, source) -> np.ndarray:
     """Every row's ``wanted`` columns, block by block, each block checked before the next is read."""
     parts: list[np.ndarray] = []
     held, budget = 0, memory_available()
-    for line, values, _ in _checked_blocks(data_path, columns, dt, wanted):
+    for line, values, _ in _checked_blocks(data_path, columns, dt, wanted, source):
         parts.append(values)
         held += values.nbytes
         if 2 * held + BLOCK_BYTES > budget:
@@ -172,11 +178,11 @@ def _stream(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS) -> n
     return np.concatenate(parts) if parts else np.zeros((0, len(wanted)))
 
 
-def _checked_blocks(data_path: Path, columns: list[str], dt: float, wanted=COLUMNS):
+def _checked_blocks(data_path: Path, columns: list[str], dt: float, wanted, source):
     """``(first line, values of the wanted columns, bytes of text)`` per block, each checked before the next is
     read."""
     last = None
-    for line, block in _blocks(data_path):
+    for line, block in _blocks(data_path, source):
         values = _block_values(data_path, columns, line, block, wanted)
         last = _check_block(data_path, values, line, block, dt, last)
         yield line, values, len(block)
@@ -297,10 +303,10 @@ def _line_of(block: bytes, line: int, row: int) -> int:
     return line + row
 
 
-def _raise_encoding_error(data_path: Path):
+def _raise_encoding_error(data_path: Path, source):
     """Name the line of the first byte that is not UTF-8."""
     line = 1
-    with open_binary(data_path) as handle:
+    with source() as handle:
         for line, raw in enumerate(handle, start=1):
             try:
                 raw.decode("utf-8")
@@ -336,10 +342,43 @@ def samples_writer(rec):
     :func:`core.files.write_files`)."""
 
     def write(handle) -> None:
-        for first in range(0, len(rec.time), CSV_CHUNK):
-            reference = None if rec.reference is None else np.degrees(rec.reference)
-            handle.write(samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK),
-                                     header=first == 0, temperature=rec.temperature,
-                                     reference=reference).encode("utf-8"))
+        for chunk in samples_chunks(rec):
+            handle.write(chunk)
 
     return write
+
+
+def samples_chunks(rec):
+    """The CSV of a recording's samples as bytes, :data:`CSV_CHUNK` rows at a time."""
+    reference = None if rec.reference is None else np.degrees(rec.reference)
+    for first in range(0, max(len(rec.time), 1), CSV_CHUNK):
+        yield samples_csv(rec.time, rec.gyro, rec.accel, slice(first, first + CSV_CHUNK), header=first == 0,
+                          temperature=rec.temperature, reference=reference).encode("utf-8")
+
+
+class _ChunkStream(io.RawIOBase):
+    """A binary file object reading the bytes of an iterable of chunks (made as they are read)."""
+
+    def __init__(self, chunks):
+        self._chunks, self._left = iter(chunks), b""
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        while not self._left:
+            self._left = next(self._chunks, None)
+            if self._left is None:
+                self._left = b""
+                return 0
+        n = min(len(buffer), len(self._left))
+        buffer[:n], self._left = self._left[:n], self._left[n:]
+        return n
+
+
+def samples_as_read(rec, data_path) -> tuple:
+    """``(time, pulses, temperature, reference)`` of a recording's samples as :func:`read_samples` reads them
+    back once written as the CSV ``data_path``: the same text, made in memory a chunk at a time, through the
+    same reader and its checks (nothing is written)."""
+    return read_samples(Path(data_path), rec.rate_hz, with_temperature=True, with_reference=True,
+                        source=lambda: io.BufferedReader(_ChunkStream(samples_chunks(rec)), BLOCK_BYTES))

@@ -124,3 +124,10 @@ class SensorNoise:
 
 NOISE_KEYS = ("gyro_arw_deg_rth", "accel_vrw_ug_rthz", "gyro_quantization_arcsec", "accel_quantization_mm_s",
               "gyro_bias_instability_deg_h", "gyro_bias_tau_s", "accel_bias_instability_ug", "accel_bias_tau_s")
+#: The largest value of each noise term (natural units; the per-sample white noise of problem files too) that
+#: an inertial sensor could have: far beyond the worst consumer MEMS part, so a larger one is a typing error
+#: (and would overflow the noise model's arithmetic).
+NOISE_CEILINGS = {"gyro_arw_deg_rth": 1e3, "accel_vrw_ug_rthz": 1e5, "gyro_quantization_arcsec": 1e6,
+                  "accel_quantization_mm_s": 1e4, "gyro_bias_instability_deg_h": 1e5, "gyro_bias_tau_s": 1e9,
+                  "accel_bias_instability_ug": 1e6, "accel_bias_tau_s": 1e9, "accel_noise_ug": 1e6,
+                  "gyro_noise_deg_h": 1e6}

@@ -33,6 +33,7 @@ from ..model.registry import natural_unit_of, natural_value_of, unit_of
 from ..core.text import markdown_text, plural
 from .acceptance import Verdict
 from .certificate import certificate_html, certificate_number, certificate_pdf
+from .exports import EXPORTS, export_path
 from .grade import grade_data, grade_markdown
 from .plots import noise_plot, residual_plot
 from .rounding import parameter_display
@@ -375,6 +376,17 @@ def certificate_files(data: dict, table_path: str | Path, kind: str, plots: dict
     data["certificate"] = {"number": number, "file": path.name}
     page = certificate_html(data, plots)
     return {path: certificate_pdf(page) if kind == "pdf" else page.encode()}
+
+
+def calibration_outputs(table_path: str | Path) -> list[Path]:
+    """The output set of a calibration written as ``NAME.csv``: the table and every file of its stem that
+    ``calibrate`` may write (report JSON and Markdown, certificate, each export).  A run owns them all
+    (:func:`core.files.claim_outputs`): those it does not write again are removed with its writes, so that no
+    certificate or export of an earlier run contradicts the table beside it."""
+    table_path = Path(table_path)
+    certificate = certificate_path(table_path)
+    return [table_path, *companion_paths(table_path), certificate, certificate.with_suffix(".pdf"),
+            *(export_path(table_path, fmt) for fmt in EXPORTS)]
 
 
 def report_files(result: CalibrationResult, rec: Recording, table_path: str | Path, report_dir: str | Path | None = None,

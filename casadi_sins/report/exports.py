@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import datetime
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -154,10 +155,13 @@ EXPORTS = {"json": ("compensation.json", lambda p, meta: to_json(compensation(p,
            "c": ("compensation.h", c_header)}
 
 
+def export_path(table_path, fmt: str) -> Path:
+    """``NAME.compensation.json`` ... : the file of the export ``fmt`` beside a table ``NAME.csv``."""
+    stem = Path(table_path).with_suffix("")
+    return stem.with_name(f"{stem.name}.{EXPORTS[fmt][0]}")
+
+
 def export_files(params: ParameterSet, table_path, formats, metadata: dict) -> dict:
     """``{path: content}`` of the exports beside a table ``NAME.csv``: ``NAME.compensation.json`` ..."""
-    from pathlib import Path
-
-    stem = Path(table_path).with_suffix("")
     meta = {k: v for k, v in metadata.items() if v is not None}
-    return {stem.with_name(f"{stem.name}.{EXPORTS[f][0]}"): EXPORTS[f][1](params, meta).encode() for f in formats}
+    return {export_path(table_path, f): EXPORTS[f][1](params, meta).encode() for f in formats}

@@ -19,7 +19,7 @@ from ..core.errors import InputError
 from ..core.inputs import check_input_file
 from ..core.text import one_line
 from ..core.files import file_sha256
-from ..data.conditions import parse_date
+from ..data.conditions import DATE_YEARS, check_year, parse_date
 from ..data.thermal import companion_path as thermal_companion
 from .calibration import companion_paths
 
@@ -132,6 +132,12 @@ def read_provenance(table_path: str | Path) -> Provenance:
                          f"calibration (years {EARLIEST_YEAR} to {LATEST_YEAR - 1})")
     rec = data.get("recording") if isinstance(data.get("recording"), dict) else {}
     versions = data.get("versions") if isinstance(data.get("versions"), dict) else {}
+    recorded = _conditions(data).get("date")
+    try:
+        check_year(parse_date(recorded)) if recorded is not None else None
+    except ValueError as exc:
+        if "years" in str(exc):
+            raise InputError(report, f"conditions.date: {exc}") from None
     return Provenance(table, table_hash, date, _text(data.get("unit_id")) or _text(_conditions(data).get("unit_id")),
                       _text(rec.get("name")), _text(rec.get("sha256")), _text(data.get("solver")),
                       _text(data.get("software")), {str(k): str(v) for k, v in versions.items()}, from_report=True,
@@ -146,7 +152,7 @@ def _conditions(data: dict) -> dict:
 
 
 #: Calibration dates outside these years are no calibration's (and 9999-12-31 overflows date arithmetic).
-EARLIEST_YEAR, LATEST_YEAR = 1970, 2200
+EARLIEST_YEAR, LATEST_YEAR = DATE_YEARS
 
 
 def _text(value) -> str | None:

@@ -19,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.errors import InputError
+from ..core.inputs import memory_available
 from ..core.rotations import NED_TO_ENU, enu_to_euler
 from ..core.units import ARCSEC, ARW_UNIT, DEG_PER_H, UG
 from ..core.files import write_files
@@ -136,6 +138,26 @@ def quantize(pulses: np.ndarray) -> np.ndarray:
     return np.diff(counts, axis=0, prepend=np.zeros((1, pulses.shape[1])))
 
 
+#: Memory a simulation holds per sample (bytes; measured about 250 B: motion, increments, noise, recording).
+SIMULATION_BYTES_PER_SAMPLE = 300.0
+
+
+def check_simulation_memory(problem: Problem) -> None:
+    """Refuse, before anything is allocated, a problem whose simulation needs more memory than is available
+    (naming the problem, its samples and the memory).
+
+    Raises
+    ------
+    InputError
+    """
+    samples = problem.duration * problem.rate_hz
+    need, free = samples * SIMULATION_BYTES_PER_SAMPLE, memory_available()
+    if need > free:
+        raise InputError(problem.source, f"{problem.name}: {problem.duration:.4g} s at {problem.rate_hz:g} Hz is "
+                         f"{samples:.3g} samples; simulating them needs about {need / 1e9:.3g} GB of memory, "
+                         f"{max(free, 0.0) / 1e9:.3g} GB are available")
+
+
 def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: str | None = None,
              progress=None) -> Simulation:
     """Simulate the problem's experiment (``progress(fraction)``, if given, as the motion is integrated).
@@ -148,6 +170,7 @@ def simulate(problem: Problem, seed: int | None = 0, noise: bool = True, name: s
     noise : bool
         ``False`` leaves out the sensor noise (not the deviations), for checks.
     """
+    check_simulation_memory(problem)
     rng = np.random.default_rng(seed)
     dev = problem.deviations
     dt = 1.0 / problem.rate_hz

@@ -36,8 +36,9 @@ from typing import Callable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..calibrate import CalibrationError, calibrate
+from ..calibrate import CalibrationError, calibrate, prepare_compiled
 from ..core.errors import InputError
+from ..core.guard import reading_own_outputs
 from ..core.files import file_sha256, safe_stem, write_files
 from ..core.text import one_line, plural, spreadsheet_cell
 from ..core.toml import read_toml
@@ -47,9 +48,8 @@ from ..data.segmentation import refine
 from ..data.tables import read_table, table_text
 from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
-from ..report.certificate import KINDS as CERTIFICATE_KINDS
-from ..report.calibration import (certificate_files, certificate_path, companion_paths, recording_hash, report_files,
-                                  report_markdown)
+from ..report.calibration import (calibration_outputs, certificate_files, certificate_path, companion_paths,
+                                  recording_hash, report_files, report_markdown)
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
@@ -86,13 +86,14 @@ def file_hash(rec_path) -> str | None:
     return recording_hash(types.SimpleNamespace(source=Path(rec_path)))
 
 
-def finished(rec_path, out_dir) -> dict | None:
+def finished(rec_path, out_dir, certificate: str | None = None) -> dict | None:
     """The report of a unit already calibrated from this very recording, or None: the report (the ledger)
     names the recording's SHA-256 as it is now and the SHA-256 of the stored table as it is now (a table
-    changed, truncated or replaced since is calibrated again)."""
+    changed, truncated or replaced since is calibrated again); with ``certificate`` (``"html"``, ``"pdf"``) its
+    certificate of that kind exists."""
     table = unit_table_path(out_dir, rec_path)
     report = companion_paths(table)[0]
-    if not (table.is_file() and report.is_file()):
+    if not (table.is_file() and report.is_file()) or (certificate and not certificate_path(table, certificate).is_file()):
         return None
     try:
         data = json.loads(report.read_text(encoding="utf-8"))
@@ -160,7 +161,8 @@ def rejudged_unit(rec_path, out_dir, options: BatchOptions, data: dict) -> dict 
     certificate written anew; None when a certificate is asked for and the stored one holds no plots to carry
     over (the unit is then calibrated again)."""
     table = unit_table_path(out_dir, rec_path)
-    params = read_table(table)
+    with reading_own_outputs():  # the batch's own table, rewritten below with the new verdict
+        params = read_table(table)
     sheet = read_acceptance_sheet(options.tolerance) if options.tolerance else None
     verdict = judge(params, sheet) if sheet else None
     plots = stored_plots(certificate_path(table)) if options.certificate else {}
@@ -196,15 +198,20 @@ def stored_plots(certificate: Path) -> dict[str, bytes] | None:
 
 
 def unit_files(out_dir, rec_path) -> list[Path]:
-    """Every file a unit's calibration writes under ``OUT/units/`` (table, report, certificate)."""
-    table = unit_table_path(out_dir, rec_path)
-    return [table, *companion_paths(table), *(certificate_path(table, kind) for kind in CERTIFICATE_KINDS)]
+    """The output set of a unit under ``OUT/units/``: its table and every file of the table's stem
+    (:func:`report.calibration.calibration_outputs`); those a new calibration does not write are removed with
+    its writes, all of them when it failed (no stale table, certificate or export beside a failure)."""
+    return calibration_outputs(unit_table_path(out_dir, rec_path))
 
 
-def remove_stale(out_dir, rec_path) -> None:
-    """Remove a unit's files left by an earlier run (its calibration failed now: no stale table beside it)."""
-    for path in unit_files(out_dir, rec_path):
-        path.unlink(missing_ok=True)
+#: The fleet's own files in OUT.
+FLEET_FILES = ("fleet.csv", "fleet.md", "fleet-spread.csv", "fleet-spread.md")
+
+
+def batch_outputs(out_dir, recordings: Sequence) -> list[Path]:
+    """Every file a batch of ``recordings`` into ``out_dir`` may write or replace: the fleet tables and each
+    unit's output set (:func:`unit_files`), to be claimed before any unit is calibrated."""
+    return [Path(out_dir) / name for name in FLEET_FILES] + [p for rec in recordings for p in unit_files(out_dir, rec)]
 
 
 def same_sheet(data: dict, options: BatchOptions) -> bool:
@@ -258,10 +265,10 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
     rows: dict[str, dict] = {}
     pending = []
     for path in paths:
-        data = finished(path, out_dir) if resume else None
+        data = finished(path, out_dir, options.certificate) if resume else None
         rejudged = rejudged_unit(path, out_dir, options, data) if data and not same_sheet(data, options) else None
         if rejudged is not None:  # another sheet: the stored table judged again, not calibrated again
-            write_files(rejudged["files"])
+            write_files(rejudged["files"], stale=unit_files(out_dir, path))  # no certificate of the old verdict
             rows[path] = {**rejudged["row"], "resumed": True, "rejudged": True}
         elif data is None or not same_sheet(data, options):
             pending.append(path)
@@ -273,15 +280,14 @@ def run_batch(recordings: Sequence, out_dir, options: BatchOptions = BatchOption
 
     def collect(result: dict) -> None:
         nonlocal done
-        if result["files"]:
-            write_files(result["files"])
-        else:
-            remove_stale(out_dir, result["row"]["recording"])
+        write_files(result["files"], stale=unit_files(out_dir, result["row"]["recording"]))
         rows[result["row"]["recording"]] = {**result["row"], "resumed": False}
         done += 1
         if progress:
             progress(done, len(paths))
 
+    if pending and (workers != 1 or scheduler):  # compiled here once, not by every worker at the same time
+        prepare_compiled(options.model, True)
     task = functools.partial(calibrate_unit, out_dir=str(out_dir), options=options)
     workers = min(workers or os.cpu_count() or 1, max(len(pending), 1)) if not scheduler else workers
     for result in run_all(task, pending, workers, scheduler) if pending else ():

@@ -10,6 +10,7 @@ import pandas as pd
 
 from ..calibrate import calibrate, prepare_compiled
 from ..calibrate.result import CalibrationError
+from ..core.errors import InputError
 from ..core.units import DEG_PER_H, UG
 from ..data.problem import Problem
 from ..model.noise import SensorNoise
@@ -74,6 +75,18 @@ def run_seed(problem: Problem, seed: int, solvers: Sequence[str] = ("ils",), use
                          "wall_time": res.wall_time, "warnings": len(res.warnings), "chi_square": chi_square,
                          "distrusted": bool(res.distrust), "failed": ""})
     return rows
+
+
+#: The most runs a Monte Carlo makes (each a simulation and calibrations: more would take weeks).
+MAX_RUNS = 100_000
+
+
+def check_runs(runs: int, option: str = "--runs") -> None:
+    """Refuse a number of Monte Carlo runs below 1 or beyond :data:`MAX_RUNS` (naming the option), before any
+    list of seeds is made."""
+    if not 1 <= runs <= MAX_RUNS:
+        raise InputError(None, f"{option} must be between 1 and {MAX_RUNS} runs (each simulates and calibrates a "
+                         f"recording), found {runs}")
 
 
 def run(problem: Problem, seeds: Sequence[int], solvers: Sequence[str] = ("ils",), workers: int | None = None,

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from ..calibrate.initial import rough_parameters
+from ..core.errors import InputError
 from ..data.problem import GroupPlan, Problem, Timing
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
 from ..report.plots import legend_outside, pyplot, save_figure
@@ -22,6 +23,22 @@ from ..report.rounding import display, float_columns
 from ..core.files import safe_stem
 from ..report.tables import write_frame
 from ..sim import simulate
+
+#: The longest navigation check, in samples of alignment and navigation (27 h at 100 Hz): a simulated static
+#: recording that long already takes a few GB.
+MAX_SAMPLES = 1e7
+
+
+def check_durations(align_s: float, duration_s: float | None, rate_hz: float) -> None:
+    """Refuse an alignment or a navigation time that is not a positive number of seconds, or longer in all than
+    :data:`MAX_SAMPLES` (naming ``--align-s`` and ``--duration-s``)."""
+    if not align_s > 0 or (duration_s is not None and not duration_s > 0):
+        raise InputError(None, f"--align-s and --duration-s must be positive numbers of seconds, found {align_s:g}"
+                         + ("" if duration_s is None else f" and {duration_s:g}"))
+    if (align_s + (duration_s or 0.0)) * rate_hz > MAX_SAMPLES:
+        raise InputError(None, f"--align-s {align_s:g} and --duration-s {duration_s or 0.0:g} at {rate_hz:g} Hz are "
+                         f"more than {MAX_SAMPLES:.3g} samples: at most {MAX_SAMPLES / rate_hz:.0f} s in all")
+
 
 def navigation_problem(problem: Problem, duration_s: float = 3600.0, align_s: float = 300.0,
                        orientation: str = "ENU") -> Problem:
@@ -34,6 +51,7 @@ def navigation_problem(problem: Problem, duration_s: float = 3600.0, align_s: fl
 def navigation_check(problem: Problem, tables: dict[str, np.ndarray], seed: int = 0, duration_s: float = 3600.0,
                      align_s: float = 300.0) -> tuple[list[NavigationRun], pd.DataFrame]:
     """Navigate a fresh static recording with each parameter table (plus the rough values and the truth)."""
+    check_durations(align_s, duration_s, problem.rate_hz)
     sim = simulate(navigation_problem(problem, duration_s, align_s), seed=seed)
     rec = sim.recording
     sets = {"rough initial values": _rough_for(problem, seed), **tables, "truth": sim.truth.values}

@@ -26,6 +26,7 @@ from ..model.parameters import ParameterSet
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
 from ..noise.raw import estimate_sensor_noise
 from .budget import Budget, error_budget
+from .navcheck import check_durations
 
 
 def longest_static(rec: Recording) -> Segment:
@@ -65,6 +66,7 @@ def recording_navigation_check(rec: Recording, tables: dict[str, np.ndarray], al
     InputError
         When that segment is too short for the alignment and at least a minute of navigation.
     """
+    check_durations(align_s, duration_s, rec.rate_hz)
     seg = longest_static(rec)
     length = seg.end - seg.start
     if length < align_s + 60.0:

@@ -95,7 +95,7 @@ def test_cli_design_with_a_scheme_writes_its_navigation(tmp_path):
     (["--scheme", "dual-axis-16"], "--criterion navigation"),
     (["--criterion", "navigation", "--scheme", "no-such-scheme"], "no-such-scheme"),
     (["--criterion", "navigation", "--hours", "1e12"], "beyond 1000 h"),
-    (["--criterion", "navigation", "--hours", "nan"], "--hours positive"),
+    (["--criterion", "navigation", "--hours", "nan"], "--hours: 'nan' is not a finite decimal number"),
 ])
 def test_cli_design_bad_scheme_is_one_line(tmp_path, capsys, args, message):
     out = tmp_path / "never"

@@ -9,6 +9,7 @@ from typing import Callable
 
 import numpy as np
 
+from ...core.inputs import memory_available
 from ...data.problem import Problem
 from .. import montecarlo as MC
 from ..consistency import consistency
@@ -50,10 +51,34 @@ def check_limits(limits: Limits) -> None:
     need += (groups - 1) * limits.handling_s
     if limits.total_s < need:
         raise DesignError(f"--total-s {limits.total_s:g} s is too short: a {limits.table_axes}-axis table needs at "
-                          f"least {need:.0f} s for its shortest usable schedule ({groups} group(s) of a first rest "
+                          f"least {need:.4g} s for its shortest usable schedule ({groups} group(s) of a first rest "
                           f"of {max(limits.first_rest_s, limits.min_rest_s):g} s, one turn of {smallest} deg at "
                           f"{limits.max_rate_deg_s:g} deg/s and a rest of {limits.min_rest_s:g} s, handling "
                           f"{limits.handling_s:g} s)")
+
+
+#: Samples of one scored schedule times the schedules scored (``--evaluations``): the default search of the
+#: paper's problem is 4e7 (about a minute); beyond this budget a search would take many hours.
+SEARCH_BUDGET = 2e9
+#: Memory one prediction holds per sample of its schedule, bytes (measured: 0.4 kB).
+PREDICTION_BYTES_PER_SAMPLE = 400.0
+
+
+def check_budget(limits: Limits, rate_hz: float, evaluations: int) -> None:
+    """One line, naming the limit and the options, for a search beyond :data:`SEARCH_BUDGET` or beyond the
+    memory its predictions need: before anything is allocated."""
+    samples = limits.total_s * rate_hz
+    if samples * evaluations > SEARCH_BUDGET:
+        longest = SEARCH_BUDGET / evaluations / rate_hz
+        raise DesignError(f"--total-s {limits.total_s:g} s at {rate_hz:g} Hz is {samples:.3g} samples per schedule "
+                          f"scored, times --evaluations {evaluations}: beyond the search budget of {SEARCH_BUDGET:.3g} "
+                          f"samples x evaluations (hours of search); lower --total-s (at most {longest:.0f} s with "
+                          f"{evaluations} evaluations) or --evaluations")
+    need, free = samples * PREDICTION_BYTES_PER_SAMPLE, memory_available()
+    if need > free / 2:
+        raise DesignError(f"--total-s {limits.total_s:g} s at {rate_hz:g} Hz is {samples:.3g} samples per schedule: "
+                          f"its prediction needs about {need / 1e9:.3g} GB of memory, {max(free, 0.0) / 1e9:.3g} GB "
+                          f"are available; lower --total-s (at most {free / 2 / PREDICTION_BYTES_PER_SAMPLE / rate_hz:.0f} s)")
 
 
 def default_rate(base: Problem) -> float:
@@ -72,6 +97,7 @@ def run_design(base: Problem, limits: Limits, criterion: str = "d", model: str =
     sigma on both schedules (``DesignRun.ils``)."""
     say = progress or (lambda text: None)
     check_limits(limits)
+    check_budget(limits, base.rate_hz, evaluations)
     t0 = time.perf_counter()
     crit = Criterion(criterion, base, model, cap, hours, scheme)
     say(f"input schedule {base.name}: predicted; searching under {limits.total_s:g} s")

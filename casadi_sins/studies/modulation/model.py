@@ -57,6 +57,10 @@ GYRO_BIAS, GYRO_SCALE, GYRO_MISALIGN = (_shift(registry.GYRO_BIAS), _shift(regis
 MAX_LATITUDE_DEG = 89.0
 
 
+#: The highest (and deepest) site the model takes, m: normal gravity and the Earth's radius of curvature hold there.
+MAX_HEIGHT_M = 1e5
+
+
 def check_site(site: Site) -> Site:
     """The site, if the model can take it: finite, and more than :data:`MAX_LATITUDE_DEG` from a pole.
 
@@ -67,6 +71,9 @@ def check_site(site: Site) -> Site:
     """
     if not np.isfinite(site.latitude) or not np.isfinite(site.height):
         raise InputError(None, f"latitude and height must be finite (got {site.latitude}, {site.height})")
+    if not abs(site.height) <= MAX_HEIGHT_M:
+        raise InputError(None, f"height {site.height:g} m is beyond {MAX_HEIGHT_M:g} m of the ground: not a site of an "
+                         "inertial navigator")
     if abs(site.latitude) >= MAX_LATITUDE_DEG * units.DEG:
         raise InputError(None, f"|latitude| {abs(site.latitude) / units.DEG:g} deg >= {MAX_LATITUDE_DEG:g} deg: "
                          "the longitude error (sec L) and the ENU frame degenerate near the pole")

@@ -48,6 +48,21 @@ EVIDENCE_CHI2 = 2.0
 RESIDUAL_LIMIT = 3.0
 #: Temperatures are fitted in units of this many degC (numbers of order one).
 T_UNIT = 10.0
+#: Calibrations closer in temperature than this (degC: a thermal chamber's stability and a sensor's resolution)
+#: are of one setpoint: a slope between them would be the difference of two calibrations divided by nothing.
+SETPOINT_RESOLUTION_C = 0.1
+
+
+def setpoints(temps) -> list[list[float]]:
+    """The temperatures grouped into setpoints: sorted, a new setpoint wherever the step to the next temperature
+    exceeds :data:`SETPOINT_RESOLUTION_C`."""
+    out: list[list[float]] = []
+    for t in sorted(float(t) for t in temps):
+        if out and t - out[-1][-1] <= SETPOINT_RESOLUTION_C:
+            out[-1].append(t)
+        else:
+            out.append([t])
+    return out
 
 
 @dataclasses.dataclass
@@ -163,11 +178,15 @@ def fit_thermal(points: list[Point], order: str = "auto", reference_c: float = 2
         Too few temperatures for the order, tables without sigma, a covariance that is not positive definite.
     """
     temps = np.array([p.temperature_c for p in points], float)
-    distinct = len(np.unique(temps))
+    groups = setpoints(temps)
+    distinct = len(groups)
     needed = 3 if order == "2" else 2
     if distinct < needed:
-        raise InputError(None, f"{distinct} distinct temperature(s): order {'2' if order == '2' else '1'} needs at "
-                         f"least {needed}")
+        close = [g for g in groups if len(g) > 1]
+        what = (f" ({'; '.join(', '.join(f'{t:.10g}' for t in g) for g in close)} degC are within "
+                f"{SETPOINT_RESOLUTION_C:g} degC of each other: one setpoint)" if close else "")
+        raise InputError(None, f"{distinct} distinct temperature setpoint(s){what}: order {'2' if order == '2' else '1'} "
+                         f"needs at least {needed} setpoints more than {SETPOINT_RESOLUTION_C:g} degC apart")
     for p in points:
         if p.params.sigma is None or np.any(~np.isfinite(p.params.sigma)):
             raise InputError(p.label, "no sigma for every parameter: a thermal fit weighs each calibration")

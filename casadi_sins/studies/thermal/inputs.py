@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.errors import InputError, shown
+from ...core.text import decimal_number
 from ...data.conditions import TEMPERATURE_RANGE_C
 from ...data.tables import read_table
 from ...model.parameters import ParameterSet
@@ -27,15 +28,26 @@ from ...report.provenance import read_provenance
 from ..modulation.calibrated import check_psd, report_covariance
 from .fit import Point
 
-_AT = re.compile(r"^(?P<path>.+)@(?P<t>[-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?)$")
+_AT = re.compile(r"^(?P<path>.+)@(?P<t>[-+0-9.eE ]*)$")
 
 
 def split_spec(spec: str) -> tuple[str, float | None]:
-    """``"NAME.csv@25"`` -> ``("NAME.csv", 25.0)``; a plain path -> ``(path, None)``."""
+    """``"NAME.csv@25"`` -> ``("NAME.csv", 25.0)``; a plain path (or an existing file with an ``@``) ->
+    ``(path, None)``.
+
+    Raises
+    ------
+    InputError
+        For text after the ``@`` that is not a decimal number of degC (``NAME.csv@.``, ``NAME.csv@1.2.3``).
+    """
     match = _AT.match(spec)
-    if match and not Path(spec).exists():
-        return match["path"], float(match["t"])
-    return spec, None
+    if not match or Path(spec).exists():
+        return spec, None
+    try:
+        return match["path"], decimal_number(match["t"])
+    except ValueError:
+        raise InputError(match["path"], f"{shown(spec)}: the temperature after '@' must be a number of degC, as in "
+                         f"{match['path']}@25") from None
 
 
 def report_temperature(table: Path) -> float | None:

@@ -1,0 +1,29 @@
+"""The output set a command owns before it computes anything (:func:`core.files.claim_outputs`).
+
+A command that writes a table owns every file of the table's stem it may write; those it does not write
+again are removed with its writes (so no certificate or export of an earlier run contradicts a new
+table).  Commands whose outputs depend on what they find (``batch``: the recordings of a folder) claim
+them themselves once found.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..data.description import recording_paths
+from ..report.calibration import calibration_outputs
+
+#: Per command, the files it owns from its arguments.
+OWNED = {
+    "calibrate": lambda args: calibration_outputs(args.out),
+    "import": lambda args: recording_paths(args.out),
+    "rough": lambda args: [args.out],
+    "segment": lambda args: [args.out],
+    "export": lambda args: [args.out],
+}
+
+
+def command_outputs(args) -> list[Path]:
+    """The files ``args``' command owns (empty for a command that claims its own or writes a folder)."""
+    owned = OWNED.get(args.command)
+    return [Path(p) for p in owned(args)] if owned else []

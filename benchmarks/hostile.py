@@ -47,24 +47,32 @@ def _outcome() -> dict:
     return {"traceback": 0, "silent_wrong": 0, "hang": 0, "partial": 0, "accepted": 0, "refused": 0}
 
 
-def cli(args: list[str], outcome: dict, must_refuse: bool = True) -> int | None:
-    """Run the command line; count its outcome; its status (None: it hung or raised)."""
+def bounded_main(args, outcome: dict, seconds: int = 60) -> tuple[int | None, str]:
+    """Run the command line for at most ``seconds``: its status and standard error (None: it hung or raised,
+    counted in ``outcome``)."""
     err = io.StringIO()
     previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(60)
+    signal.alarm(seconds)
     try:
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            status = main(args)
+            status = main([str(a) for a in args])
     except Hang:
         outcome["hang"] = 1
-        return None
+        return None, ""
     except BaseException:  # noqa: BLE001
         outcome["traceback"] = 1
-        return None
+        return None, ""
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, previous)
-    text = err.getvalue().strip()
+    return status, err.getvalue().strip()
+
+
+def cli(args: list[str], outcome: dict, must_refuse: bool = True) -> int | None:
+    """Run the command line; count its outcome; its status (None: it hung or raised)."""
+    status, text = bounded_main(args, outcome)
+    if status is None:
+        return None
     if status == 0:
         outcome["accepted"] = 1
         outcome["silent_wrong"] |= int(must_refuse)

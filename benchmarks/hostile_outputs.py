@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.util
 import io
 import json
 import os
@@ -29,7 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-from casadi_sins.cli import main
 
 CLASSES = ("folder-expansion outputs", "cleanup over inputs", "import edge files", "near-coincident temperatures")
 #: Classes run in a child process each (memory or signals measured): their own, smaller, seed count.
@@ -38,36 +38,17 @@ KEYS = ("time", "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 ALLOWED = (0, 2, 3, 130, 143)
 
 
-class Hang(Exception):
-    pass
-
-
-def _alarm(signum, frame):
-    raise Hang
-
-
-def _outcome() -> dict:
-    return {"traceback": 0, "silent_wrong": 0, "hang": 0, "partial": 0, "accepted": 0, "refused": 0}
+_spec = importlib.util.spec_from_file_location("hostile", Path(__file__).resolve().parent / "hostile.py")
+hostile = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(hostile)
+_outcome = hostile._outcome
 
 
 def cli(args, outcome: dict, expect: tuple = (2,), lines: int | None = 1) -> int | None:
     """Run the command line; count its outcome against the statuses ``expect``; its status."""
-    err = io.StringIO()
-    previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.alarm(60)
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            status = main([str(a) for a in args])
-    except Hang:
-        outcome["hang"] = 1
+    status, text = hostile.bounded_main(args, outcome)
+    if status is None:
         return None
-    except BaseException:  # noqa: BLE001
-        outcome["traceback"] = 1
-        return None
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
-    text = err.getvalue().strip()
     outcome["accepted" if status in (0, 3) else "refused"] = 1
     if status not in ALLOWED or "internal error" in text or "Traceback" in text:
         outcome["traceback"] = 1

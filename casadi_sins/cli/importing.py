@@ -42,7 +42,7 @@ def cmd_import(args) -> int:
     written, then write it (a recording our own reader refuses is never written)."""
     out = Path(args.out)
     name = check_name_option(args.name or out.stem)
-    check_site_options(0.0 if args.latitude is None else args.latitude, args.height, args.gravity)
+    check_site_options(0.0 if args.latitude is None else args.latitude, args.height)
     check_rate_option(args.rate)
     names = parse_map(args.map)
     time, pulses, temperature = import_samples(args.kind, args.src, names)

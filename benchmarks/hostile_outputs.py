@@ -456,7 +456,7 @@ def _bomb(kind: str, folder: Path, rng) -> Path:
 
 #: A child running the command line as the console script does (a late signal, after the command, is ignored): it
 #: says "ready" once imported (an interruption while the package is still importing is issue 34's), then runs it.
-READY = "import sys\nfrom casadi_sins.cli import console\nprint('ready', file=sys.stderr, flush=True)\nconsole()"
+READY = "import sys\nfrom casadi_sins.console import console\nprint('ready', file=sys.stderr, flush=True)\nconsole()"
 
 
 def worker_signals(folder, toml, csv, rng, outcome):

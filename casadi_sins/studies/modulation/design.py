@@ -161,7 +161,7 @@ def step_tables(req: Request, site: Site, axes: tuple[str, ...], root: np.ndarra
 def responses(req: Request, site: Site, points: int = 48) -> np.ndarray:
     """(2, T, 4, 3) response of (v_E, v_N, north, east) at ``T`` times over the run to a unit constant tilt
     (first) and a unit constant navigation-frame gyro drift (second), E N U: the static navigation error
-    model of :func:`model.navigation_block` (Schuler, Earth-rate and Foucault loops), through
+    model of :func:`nav.errorstate.navigation_block` (Schuler, Earth-rate and Foucault loops), through
     ``expm([[F, E], [0, 0]] t)`` (the drift enters ``phi' = -drift``)."""
     from ...core.linalg import expm
 

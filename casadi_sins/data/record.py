@@ -161,8 +161,24 @@ def read_record(table_path: str | Path) -> "CalibrationRecord":
     InputError
         Naming the table or the report that cannot be read (:func:`read_report`).
     """
+    return _record(Path(table_path), read_table(table_path))
+
+
+def read_provenance(table_path: str | Path) -> "Provenance":
+    """Where a table comes from (:attr:`CalibrationRecord.provenance`), the table itself not parsed: any file
+    ``NAME.csv`` (a parameter table, a thermal model) with or without its companion report.
+
+    Raises
+    ------
+    InputError
+        When the file cannot be read, or its companion report exists but is not a calibration report.
+    """
     table = Path(table_path)
-    params = read_table(table)
+    check_input_file(table, "parameter table", max_bytes=MAX_REPORT_BYTES)
+    return _record(table, None).provenance
+
+
+def _record(table: Path, params: ParameterSet | None) -> "CalibrationRecord":
     try:
         digest, mtime = file_sha256(table), table.stat().st_mtime
     except OSError as exc:

@@ -9,26 +9,13 @@ from its companion ``thermal.json`` (:func:`thermal_provenance`).
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from ..core.errors import InputError
 from ..core.inputs import check_input_file
 from ..core.text import one_line
 from ..core.files import file_sha256
-from ..data.record import MAX_REPORT_BYTES, Provenance, conditions_metadata, read_record  # noqa: F401 (exported)
-from ..data.thermal import companion_path as thermal_companion
-
-
-def read_provenance(table_path: str | Path) -> Provenance:
-    """The provenance of a parameter table from its record (:attr:`data.record.CalibrationRecord.provenance`).
-
-    Raises
-    ------
-    InputError
-        When the table cannot be read, or its companion report exists but is not a calibration report.
-    """
-    return read_record(table_path).provenance
+from ..data.record import MAX_REPORT_BYTES, Provenance, conditions_metadata, read_provenance  # noqa: F401 (exported)
+from ..data.thermal import companion_path as thermal_companion, read_companion
 
 
 def _text(value) -> str | None:
@@ -50,14 +37,10 @@ def thermal_provenance(thermal_csv: str | Path) -> dict:
     check_input_file(csv_path, "thermal model", max_bytes=MAX_REPORT_BYTES)
     out = {"thermal_model": str(csv_path), "thermal_model_sha256": file_sha256(csv_path)}
     json_path = thermal_companion(csv_path)
-    if not json_path.is_file():
+    data = read_companion(csv_path)
+    if data is None:
         out["provenance"] = "no companion thermal.json: covariance, dates and calibrations unknown"
         return out
-    check_input_file(json_path, "thermal model companion", max_bytes=MAX_REPORT_BYTES)
-    try:
-        data = json.loads(json_path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, RecursionError, json.JSONDecodeError) as exc:
-        raise InputError(json_path, f"cannot be read ({one_line(exc)})") from None
     data = data if isinstance(data, dict) else {}
     versions = data.get("versions") if isinstance(data.get("versions"), dict) else {}
     out.update({"unit_id": _text(data.get("unit_id")), "thermal_covariance_sha256": file_sha256(json_path),

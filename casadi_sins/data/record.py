@@ -499,7 +499,7 @@ class CalibrationRecord:
         """The table with the report's covariance when it gives one (its sigma column alone else); for a
         record known only from its report, the report's rows (SI values and sigma)."""
         if self.table_parameters is None:
-            rows = [p for p in self.report.get("parameters") or [] if isinstance(p, dict)]
+            rows = self._rows()
             sigma = [math.nan if p.get("sigma") is None else p["sigma"] for p in rows]
             return ParameterSet(np.array([p["value"] for p in rows], dtype=float), sigma=np.array(sigma, dtype=float),
                                 names=tuple(p["parameter"] for p in rows))
@@ -511,7 +511,16 @@ class CalibrationRecord:
     def _names(self) -> tuple[str, ...]:
         if self.table_parameters is not None:
             return tuple(self.table_parameters.names)
-        return tuple(p["parameter"] for p in self.report.get("parameters") or [] if isinstance(p, dict))
+        return tuple(p["parameter"] for p in self._rows())
+
+    def _rows(self) -> list[dict]:
+        """The report's parameter rows that name a parameter with a numeric value and sigma (or none)."""
+        rows = self.report.get("parameters")
+
+        def number(x) -> bool:
+            return isinstance(x, (int, float)) and not isinstance(x, bool)
+        return [p for p in rows if isinstance(p, dict) and isinstance(p.get("parameter"), str) and number(p.get("value"))
+                and (p.get("sigma") is None or number(p["sigma"]))] if isinstance(rows, list) else []
 
     @functools.cached_property
     def provenance(self) -> Provenance:

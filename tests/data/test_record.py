@@ -170,3 +170,15 @@ def test_a_covariance_that_is_not_the_tables_is_refused(calibrated, tmp_path):
     companion_paths(copy)[0].write_text(json.dumps(data))
     with pytest.raises(InputError, match="diagonal does not match the sigma"):
         read_record(copy).parameters
+
+
+def test_a_report_alone_gives_the_tables_values_and_sigma(calibrated):
+    """``batch`` resumes from a unit's report (its ledger) without reading the table: the same values and sigma."""
+    _, table = calibrated
+    data = json.loads(companion_paths(table)[0].read_text())
+    params, alone = read_table(table), CalibrationRecord.of_report(data).parameters
+    assert alone.names == params.names
+    np.testing.assert_array_equal(alone.values, params.values)
+    np.testing.assert_array_equal(alone.sigma, params.sigma)
+    data["parameters"] = [{"parameter": "gyro_bias_x", "value": "1"}, 7, {"value": 1.0}] + data["parameters"][:2]
+    assert CalibrationRecord.of_report(data).parameters.names == params.names[:2]  # rows that are none are left out

@@ -7,7 +7,7 @@ the recording's name and SHA-256, the table's SHA-256 as written), the recording
 acceptance verdict with its reasons, the warnings, and the calibration's details (noise, checks, solver).
 This module is the one place that writes those keys and reads them back: :class:`CalibrationRecord` and
 :func:`read_record` for the readers (``export``, ``apply``, ``history``, ``thermal``, ``modulate``,
-``batch``), :meth:`CalibrationRecord.report` and :func:`report_bytes` for the writers.
+``batch``), :meth:`CalibrationRecord.of_calibration` and :meth:`CalibrationRecord.report_json` for the writers.
 
 A table without a report is a record without covariance and with what its file tells (its SHA-256 and
 modification date, flagged as such).  A report that is not JSON, too large or not a file is one
@@ -45,9 +45,6 @@ TABLE_SHA256_KEY = "table_sha256"
 MAX_REPORT_BYTES = 50_000_000
 #: Calibration dates outside these years are no calibration's (and 9999-12-31 overflows date arithmetic).
 EARLIEST_YEAR, LATEST_YEAR = DATE_YEARS
-#: The keys a record owns (every other key of a report is a detail, kept as written).
-OWNED_KEYS = ("format", "software", "created", "versions", "unit_id", "recording", "conditions", "solver",
-              "warnings", "parameters", "covariance", "verdict", "acceptance", "table", TABLE_SHA256_KEY)
 
 
 def companion_paths(table_path: str | Path) -> tuple[Path, Path]:

@@ -23,7 +23,7 @@ from ..calibrate.result import CalibrationResult
 from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS, p_value
 from ..core.units import DEG_PER_H, UG
 from ..data.conditions import conditions_dict
-from ..data.record import CalibrationRecord, companion_paths  # noqa: F401 (companion_paths: also read from here)
+from ..data.record import CalibrationRecord, companion_paths, parameter_rows  # noqa: F401 (also read from here)
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
 from ..model.parameters import ParameterSet

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import sys
 import time
@@ -26,6 +25,7 @@ from ..core.errors import InputError
 from ..data.description import MAX_NAME, description_from_text, description_toml, read_description, read_recording
 from ..data.problem import load_problem
 from ..data.conditions import conditions_dict
+from ..data.record import parse_report, report_path
 from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
 from ..data.tables import read_table, table_text, write_table
@@ -214,7 +214,7 @@ def cmd_calibrate(args) -> int:
     files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
                               unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
                               table_sha256=table_sha256))
-    report = json.loads(files[companion_paths(args.out)[0]])  # the date and software, as `export` gives them
+    report = parse_report(files[report_path(args.out)], report_path(args.out))  # the date and software, as `export`
     files.update(export_files(result.parameters, args.out, args.export or (), {
         "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
         "calibrated_with": report["software"],

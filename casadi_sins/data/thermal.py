@@ -37,6 +37,24 @@ def companion_path(csv_path: str | Path) -> Path:
     return Path(csv_path).with_suffix(".json")
 
 
+def read_companion(csv_path: str | Path) -> object | None:
+    """The companion ``NAME.json`` of a thermal model ``NAME.csv`` as parsed JSON, None when there is none.
+
+    Raises
+    ------
+    InputError
+        Naming the companion when it is not a regular readable file, too large, or not JSON.
+    """
+    companion = companion_path(csv_path)
+    if not (companion.exists() or companion.is_symlink()):
+        return None
+    check_input_file(companion, "thermal model companion", MAX_BYTES)
+    try:
+        return json.loads(companion.read_bytes())
+    except (OSError, UnicodeDecodeError, RecursionError, ValueError) as exc:
+        raise InputError(companion, f"not JSON ({shown(str(exc), 80)})") from None
+
+
 def thermal_csv_text(model: ThermalModel) -> str:
     """The ``thermal.csv`` text of a model (every float in its shortest exact form)."""
     sigma = model.sigma
@@ -140,14 +158,10 @@ def _covariance(path: Path, names: list[str], sigma: np.ndarray) -> np.ndarray |
     """The companion's covariance (checked against the sigma columns), else the diagonal of the sigma."""
     companion = companion_path(path)
     n = len(names)
-    if not companion.exists():
+    doc = read_companion(path)
+    if doc is None:
         diag = sigma.T.ravel()
         return None if np.all(np.isnan(diag)) else np.diag(np.nan_to_num(diag) ** 2)
-    check_input_file(companion, "thermal model covariance", MAX_BYTES)
-    try:
-        doc = json.loads(companion.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise InputError(companion, f"not JSON ({shown(str(exc), 80)})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise InputError(companion, f"not a thermal model covariance (format {FORMAT})")
     if doc.get("names") != names:

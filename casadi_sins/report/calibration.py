@@ -10,10 +10,8 @@ the base motion found.
 
 from __future__ import annotations
 
-import datetime
 import functools
 import hashlib
-import json
 import math
 import tomllib
 from pathlib import Path
@@ -21,15 +19,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..core.version import build_identity, software_versions
 from ..calibrate.result import CalibrationResult
 from ..calibrate.wander import INCLUDE_LR, SENSOR_WORDS, TAU_WORDS, p_value
 from ..core.units import DEG_PER_H, UG
 from ..data.conditions import conditions_dict
+from ..data.record import CalibrationRecord, companion_paths, parameter_rows  # noqa: F401 (also read from here)
 from ..data.recording import Recording
 from ..model.noise import SensorNoise
-from ..model.parameters import ParameterSet, truth_errors
-from ..model.registry import natural_unit_of, natural_value_of, unit_of
+from ..model.parameters import ParameterSet
 from ..core.text import markdown_text, plural
 from .acceptance import Verdict
 from .certificate import certificate_html, certificate_number, certificate_pdf
@@ -63,27 +60,6 @@ def _files_hash(files: tuple) -> str:
             for block in iter(lambda: handle.read(1 << 20), b""):
                 digest.update(block)
     return digest.hexdigest()
-
-
-def parameter_rows(params: ParameterSet, truth: ParameterSet | None = None) -> list[dict]:
-    """One row per parameter: SI value and sigma, natural value and sigma, error against a truth."""
-    sigma = params.natural_sigma()
-    errors = truth_errors(params, truth) if truth is not None else None
-    rows = []
-    for i, name in enumerate(params.names):
-        value, unit = natural_value_of(name, params.values[i])
-        row = {"parameter": name, "unit": unit_of(name), "value": float(params.values[i]),
-               "sigma": None if params.sigma is None else float(params.sigma[i]),
-               "value_natural": value, "value_unit": unit, "sigma_natural": float(sigma[i]),
-               "sigma_unit": natural_unit_of(name)}
-        if errors is not None:
-            err = float(errors[i])
-            if not math.isfinite(err):  # the truth file does not give this parameter
-                row.update(error_natural=None, error_over_sigma=None)
-            else:
-                row.update(error_natural=err, error_over_sigma=err / float(sigma[i]) if sigma[i] > 0 else math.nan)
-        rows.append(row)
-    return rows
 
 
 def strongest_correlations(params: ParameterSet, count: int = 6) -> list[dict]:
@@ -124,39 +100,32 @@ def _wander_dict(wander: dict) -> dict | None:
 
 def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None, command: str | None = None,
                 unit_id: str | None = None, verdict: Verdict | None = None) -> dict:
-    """Everything of the report as plain data (the JSON file); with a ``verdict`` (:func:`report.acceptance.judge`)
-    also ``"verdict"`` (``"pass"`` or ``"fail"``) and ``"acceptance"`` (its reasons and sheet)."""
+    """Everything of the report as plain data (the JSON file, :func:`calibration_record`)."""
+    return calibration_record(result, rec, truth, command, unit_id, verdict).report
+
+
+def calibration_record(result: CalibrationResult, rec: Recording, truth: ParameterSet | None = None,
+                       command: str | None = None, unit_id: str | None = None,
+                       verdict: Verdict | None = None) -> CalibrationRecord:
+    """The record of a calibration (:class:`data.record.CalibrationRecord`): its table, provenance, conditions and
+    warnings, and as details the solver's status, the checks, the noise, the grade and the base motion; with a
+    ``verdict`` (:func:`report.acceptance.judge`) also ``"verdict"`` (``"pass"`` or ``"fail"``) and
+    ``"acceptance"`` (its reasons and sheet)."""
     raw = result.noise.raw
     checks = [c.as_dict() for c in result.checks]
     motion = result.base_motion
-    data = {
-        "format": "casadi-sins-report/1",
-        "software": build_identity(),
-        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "versions": software_versions(),
-        "command": command,
-        "unit_id": unit_id or rec.conditions.unit_id,  # --unit-id, else the recording's
-        "recording": {"name": rec.name, "source": str(rec.source) if rec.source else None,
-                      "sha256": recording_hash(rec), "samples": int(len(rec.time)), "rate_hz": rec.rate_hz,
-                      "groups": len(rec.group_ids), "segments": len(rec.segments),
-                      "latitude_deg": math.degrees(rec.site.latitude), "gravity_mps2": rec.site.g},
-        "conditions": conditions_dict(rec),
-        "solver": result.solver,
+    details = {
         "converged": bool(result.success),
         "iterations": int(result.nit),
         "wall_time_s": float(result.wall_time),
         "sigma_meaning": result.sigma_meaning,
         "status": int(result.status),
         "message": result.message,
-        "warnings": list(result.warnings),
         "notes": list(result.notes),
         "distrusted": list(result.distrust),
         "checks": checks,
         "variance_factor": float(result.variance_factor),
         "grade": grade_data(result.parameters, rec),
-        "parameters": parameter_rows(result.parameters, truth),
-        "covariance": (None if result.parameters.covariance is None
-                       else [[float(x) for x in row] for row in result.parameters.covariance]),  # SI, table order
         "strongest_correlations": strongest_correlations(result.parameters),
         "noise": {"model": _noise_dict(result.noise.model), "fitted": _noise_dict(result.noise.fitted),
                   "raw": _noise_dict(raw.model().merged(raw.upper_bounds()) if raw is not None else None),
@@ -172,18 +141,23 @@ def report_data(result: CalibrationResult, rec: Recording, truth: ParameterSet |
     }
     if result.nlp is not None:
         nlp = result.nlp
-        data["ipopt"] = {"status": nlp.ipopt_status, "iterations": nlp.ipopt_iterations}
-        data["post_solve_steps_sigma"] = [float(s) for s in nlp.gls_steps]
-        data["rotation_steps_used"] = bool(nlp.rotation_steps_used)
-        data["start_offsets_arcsec"] = {str(g): [float(x) for x in v] for g, v in nlp.start_offsets_arcsec.items()}
-        data["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection,
+        details["ipopt"] = {"status": nlp.ipopt_status, "iterations": nlp.ipopt_iterations}
+        details["post_solve_steps_sigma"] = [float(s) for s in nlp.gls_steps]
+        details["rotation_steps_used"] = bool(nlp.rotation_steps_used)
+        details["start_offsets_arcsec"] = {str(g): [float(x) for x in v] for g, v in nlp.start_offsets_arcsec.items()}
+        details["model"] = {"extra_groups": list(nlp.model), "selection": nlp.model_selection,
                          "left_out": nlp.left_out}
     if result.ils is not None:
-        data["equations"] = result.ils.equations
-    if verdict is not None:
-        data["verdict"] = verdict.verdict
-        data["acceptance"] = verdict.as_dict()
-    return data
+        details["equations"] = result.ils.equations
+    recording = {"name": rec.name, "source": str(rec.source) if rec.source else None, "sha256": recording_hash(rec),
+                 "samples": int(len(rec.time)), "rate_hz": rec.rate_hz, "groups": len(rec.group_ids),
+                 "segments": len(rec.segments), "latitude_deg": math.degrees(rec.site.latitude),
+                 "gravity_mps2": rec.site.g}
+    return CalibrationRecord.of_calibration(
+        result.parameters, solver=result.solver, command=command,
+        unit_id=unit_id or rec.conditions.unit_id,  # --unit-id, else the recording's
+        recording=recording, conditions=conditions_dict(rec), warnings=result.warnings, details=details,
+        verdict=verdict and verdict.verdict, acceptance=verdict and verdict.as_dict(), truth=truth)
 
 
 def report_markdown(data: dict) -> str:
@@ -355,13 +329,6 @@ def _model_lines(model: dict | None) -> list[str]:
     return lines
 
 
-def companion_paths(table_path: str | Path) -> tuple[Path, Path]:
-    """``NAME.report.json`` and ``NAME.report.md`` beside a parameter table ``NAME.csv``."""
-    table_path = Path(table_path)
-    stem = table_path.with_suffix("")
-    return stem.with_name(stem.name + ".report.json"), stem.with_name(stem.name + ".report.md")
-
-
 def certificate_path(table_path: str | Path, kind: str = "html") -> Path:
     """``NAME.certificate.html`` (or ``.pdf``) beside a parameter table ``NAME.csv``."""
     stem = Path(table_path).with_suffix("")
@@ -397,9 +364,8 @@ def report_files(result: CalibrationResult, rec: Recording, table_path: str | Pa
     ``certificate`` (``"html"``, ``"pdf"``; True: html) also the certificate ``NAME.certificate.html`` or ``.pdf``
     (:mod:`report.certificate`).  ``table_sha256``: the SHA-256 of the table as written (in the report, on the
     certificate and in its number)."""
-    data = report_data(result, rec, truth, command, unit_id, verdict)
-    data["table"] = Path(table_path).name
-    data["table_sha256"] = table_sha256
+    record = calibration_record(result, rec, truth, command, unit_id, verdict).with_table(table_path, table_sha256)
+    data = record.report
     json_path, md_path = companion_paths(table_path)
     plots = ({"velocity in the static intervals after calibration": residual_plot(result, rec),
               "Allan deviation of the static data against the noise model": noise_plot(result, rec)}
@@ -408,8 +374,7 @@ def report_files(result: CalibrationResult, rec: Recording, table_path: str | Pa
     if certificate:
         files.update(certificate_files(data, table_path, "html" if certificate is True else certificate, plots))
     text = report_markdown(data)
-    files.update({json_path: (json.dumps(data, indent=2, default=_json_default) + "\n").encode(),
-                  md_path: text.encode()})
+    files.update({json_path: record.report_json(), md_path: text.encode()})
     if report_dir is not None:
         out = Path(report_dir)
         stem = f"{rec.file_stem}-{result.solver}"
@@ -421,13 +386,3 @@ def report_files(result: CalibrationResult, rec: Recording, table_path: str | Pa
         files[out / f"{stem}-allan.png"] = allan
     return files
 
-
-def _json_default(value):
-    """NumPy values in JSON."""
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, (np.bool_,)):
-        return bool(value)
-    return str(value)

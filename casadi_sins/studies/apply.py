@@ -39,7 +39,7 @@ from ..core.units import DEG_PER_H, UG
 from ..data.description import description_toml
 from ..data.recording import Recording
 from ..data.samples import samples_csv
-from ..data.tables import read_table
+from ..data.record import read_record
 from ..model.output import compensate, compensate_table
 from ..model.registry import N_PARAMS
 from ..model.parameters import ParameterSet
@@ -154,12 +154,9 @@ def table_sigma(rec: Recording, params: ParameterSet) -> pd.DataFrame:
 
 
 def table_with_covariance(path) -> ParameterSet:
-    """A parameter table with the covariance of its companion report when there is one (its sigma alone else)."""
-    from .modulation.calibrated import report_covariance
-
-    params = read_table(path)
-    cov, _ = report_covariance(path, params.names)
-    return ParameterSet(params.values, covariance=cov, names=params.names) if cov is not None else params
+    """A parameter table with the covariance of its companion report when there is one (its sigma alone else):
+    :attr:`data.record.CalibrationRecord.parameters`."""
+    return read_record(path).parameters
 
 
 def judged_check(check: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:

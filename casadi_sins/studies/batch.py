@@ -20,11 +20,9 @@ from __future__ import annotations
 
 import base64
 import dataclasses
-import datetime
 import functools
 import hashlib
 import html
-import json
 import math
 import re
 import os
@@ -43,13 +41,15 @@ from ..core.files import file_sha256, safe_stem, write_files
 from ..core.text import one_line, plural, spreadsheet_cell
 from ..core.toml import read_toml
 from ..data.datasheet import read_datasheet
+from ..data.record import TABLE_SHA256_KEY as LEDGER_TABLE_KEY  # noqa: F401 (the ledger's key, for tests and tools)
+from ..data.record import CalibrationRecord, companion_paths, parse_report, read_report, report_path
 from ..data.description import read_recording
 from ..data.segmentation import refine
 from ..data.tables import read_table, table_text
 from ..model.registry import ALL_NAMES, natural_scale_of, natural_unit_of, natural_value_of, relative_mask
 from ..report.acceptance import judge, read_acceptance_sheet, sheet_sha256
-from ..report.calibration import (calibration_outputs, certificate_files, certificate_path, companion_paths,
-                                  recording_hash, report_files, report_markdown)
+from ..report.calibration import (calibration_outputs, certificate_files, certificate_path, recording_hash,
+                                  report_files, report_markdown)
 from ..report.rounding import display, sigma_in_value_unit
 from ..report.tables import frame_files
 from .parallel import run_all
@@ -59,8 +59,6 @@ OUTLIER_THRESHOLD = 5.0
 #: The columns of the spread table.
 SPREAD_COLUMNS = ("parameter", "unit", "units", "median (SI)", "robust spread", "std", "min", "max",
                   "median unit sigma", "outliers")
-#: The key of the unit report (the batch's ledger) holding the SHA-256 of the unit's table as written.
-LEDGER_TABLE_KEY = "table_sha256"
 #: The columns of the fleet tables that carry names (unit ids, paths, messages): no formula in a spreadsheet.
 NAME_COLUMNS = ("unit_id", "recording", "message", "outliers")
 
@@ -92,38 +90,38 @@ def finished(rec_path, out_dir, certificate: str | None = None) -> dict | None:
     changed, truncated or replaced since is calibrated again); with ``certificate`` (``"html"``, ``"pdf"``) its
     certificate of that kind exists."""
     table = unit_table_path(out_dir, rec_path)
-    report = companion_paths(table)[0]
-    if not (table.is_file() and report.is_file()) or (certificate and not certificate_path(table, certificate).is_file()):
+    if not (table.is_file() and report_path(table).is_file()) or (
+            certificate and not certificate_path(table, certificate).is_file()):
         return None
     try:
-        data = json.loads(report.read_text(encoding="utf-8"))
+        with reading_own_outputs():  # the batch's own ledger, rewritten when the unit is calibrated again
+            data = read_report(table)
         stored = file_sha256(table)
-    except (OSError, ValueError, RecursionError):
+    except (OSError, InputError):
         return None
-    if not isinstance(data, dict):
-        return None
-    digest = (data.get("recording") or {}).get("sha256")
-    same_table = data.get(LEDGER_TABLE_KEY) == stored
+    record = CalibrationRecord.of_report(data, table)
+    digest = record.recording_sha256
+    same_table = record.stored_table_sha256 == stored
     return data if digest and digest == file_hash(rec_path) and same_table else None
 
 
 def row_from_report(data: dict, rec_path, status: str) -> dict:
     """The fleet-table row of a unit from its report data; its message gives the reasons of a failed verdict
     first, then the warnings (every unit out of tolerance says why)."""
-    warnings = list(data.get("warnings") or [])
-    conditions = data.get("conditions") if isinstance(data.get("conditions"), dict) else {}
-    reasons = list((data.get("acceptance") or {}).get("reasons") or []) if data.get("verdict") == "fail" else []
-    row = {"unit_id": data.get("unit_id") or conditions.get("unit_id") or Path(rec_path).stem, "recording": str(rec_path),
+    record = CalibrationRecord.of_report(data)
+    warnings, reasons, conditions = record.warnings, record.reasons, record.conditions
+    row = {"unit_id": record.unit_id or Path(rec_path).stem, "recording": str(rec_path),
            "status": status if not warnings or status != "ok" else "warnings", "warnings": len(warnings),
            "message": " | ".join([*(f"out of tolerance: {r}" for r in reasons), *warnings]),
-           "wall_time_s": data.get("wall_time_s", math.nan), "verdict": data.get("verdict", "")}
+           "wall_time_s": record.wall_time_s, "verdict": record.verdict or ""}
     for key, column in (("date", "recorded"), ("temperature_c", "temperature_c"), ("operator", "operator"),
                         ("bench", "bench")):
         if conditions.get(key) is not None:
             row[column] = conditions[key]
-    for p in data.get("parameters") or []:
-        row[p["parameter"]] = p["value"]
-        row[f"{p['parameter']}_sigma"] = math.nan if p.get("sigma") is None else p["sigma"]
+    params = record.parameters
+    for name, value, sigma in zip(params.names, params.values, params.sigma):
+        row[name] = value
+        row[f"{name}_sigma"] = sigma
     return row
 
 
@@ -143,9 +141,7 @@ def calibrate_unit(rec_path: str, out_dir: str, options: BatchOptions = BatchOpt
         files.update(report_files(result, rec, table, command="casadi-sins batch", unit_id=rec.conditions.unit_id or rec.name,
                                   verdict=verdict, certificate=options.certificate,
                                   table_sha256=hashlib.sha256(files[table]).hexdigest()))
-        report = companion_paths(table)[0]
-        data = {**json.loads(files[report]), LEDGER_TABLE_KEY: hashlib.sha256(files[table]).hexdigest()}
-        files[report] = (json.dumps(data, indent=2, default=str) + "\n").encode()
+        data = parse_report(files[report_path(table)], report_path(table))  # the ledger: names the table's SHA-256
         return {"row": row_from_report(data, rec_path, "ok"), "files": files}
     except Exception as exc:  # noqa: BLE001 (one failed unit never stops the batch: its reason is reported)
         message = one_line(exc, 500) or type(exc).__name__
@@ -169,19 +165,17 @@ def rejudged_unit(rec_path, out_dir, options: BatchOptions, data: dict) -> dict 
     if plots is None:
         return None
     text = table_text(params, acceptance=verdict and verdict.outcome).encode()
-    data = {k: v for k, v in data.items() if k not in ("verdict", "acceptance", "certificate")}
-    if verdict is not None:
-        data.update(verdict=verdict.verdict, acceptance=verdict.as_dict())
-    data[LEDGER_TABLE_KEY] = hashlib.sha256(text).hexdigest()
-    data["judged"] = {"date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                      "note": "judged again against the sheet from the stored table, not calibrated again"}
+    record = CalibrationRecord.of_report(data).judged(
+        verdict and verdict.verdict, verdict and verdict.as_dict(),
+        "judged again against the sheet from the stored table, not calibrated again")
+    record = record.with_table(table, hashlib.sha256(text).hexdigest())
     files = {table: text}
     if options.certificate:
-        files.update(certificate_files(data, table, options.certificate, plots))
+        files.update(certificate_files(record.report, table, options.certificate, plots))
     json_path, md_path = companion_paths(table)
-    files[json_path] = (json.dumps(data, indent=2, default=str) + "\n").encode()
-    files[md_path] = report_markdown(data).encode()
-    return {"row": row_from_report(data, rec_path, "ok"), "files": files}
+    files[json_path] = record.report_json()
+    files[md_path] = report_markdown(record.report).encode()
+    return {"row": row_from_report(record.report, rec_path, "ok"), "files": files}
 
 
 _PLOT = re.compile(r'<img alt="([^"]*)" src="data:image/png;base64,([A-Za-z0-9+/=]+)">')
@@ -216,7 +210,7 @@ def batch_outputs(out_dir, recordings: Sequence) -> list[Path]:
 
 def same_sheet(data: dict, options: BatchOptions) -> bool:
     """Whether a finished unit's report was judged against the sheet of this batch (or neither was judged)."""
-    judged = (data.get("acceptance") or {}).get("sheet_sha256")
+    judged = CalibrationRecord.of_report(data).acceptance.get("sheet_sha256")
     return judged == (sheet_sha256(options.tolerance) if options.tolerance else None)
 
 

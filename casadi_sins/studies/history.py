@@ -1,7 +1,7 @@
 """One unit followed across its calibrations: repeatability, drift, pass/fail against a tolerance sheet.
 
 The tables are ordered by the date of their recording (``[conditions] date`` of the recording, carried
-in each table's companion report, :mod:`report.provenance`); without one, by the date of the
+in each table's companion report, its record, :mod:`data.record`); without one, by the date of the
 calibration (the report's), and a table without a report falls back to its file date, with a note.  For every
 parameter and every pair of consecutive calibrations::
 
@@ -27,12 +27,11 @@ import numpy as np
 import pandas as pd
 
 from ..core.errors import InputError
-from ..data.tables import read_table
+from ..data.record import Provenance, read_record
 from ..data.tolerance import ToleranceSheet
 from ..model.parameters import ParameterSet, natural_errors
 from ..model.registry import GROUPS, natural_unit_of
 from ..report.plots import legend_outside, figure_bytes, pyplot
-from ..report.provenance import Provenance, read_provenance
 from ..report.rounding import rounded
 from ..report.tables import frame_files
 
@@ -76,7 +75,8 @@ def load_history(paths) -> tuple[list[Calibration], list[str]]:
     """
     if len(paths) < 2:
         raise InputError(None, "history needs at least two parameter tables of one unit")
-    cals = [Calibration(read_provenance(p), read_table(p)) for p in paths]
+    records = [read_record(p) for p in paths]
+    cals = [Calibration(r.provenance, r.table_parameters) for r in records]
     notes = [f"{c.provenance.table}: no companion report; its file date {c.label} is taken as the date of the "
              "calibration and its unit and recording are not known" for c in cals if not c.provenance.from_report]
     units = {c.provenance.unit_id for c in cals if c.provenance.unit_id}

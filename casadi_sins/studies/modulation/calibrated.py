@@ -19,37 +19,20 @@ g-sensitivity and scale asymmetry, the accelerometer quadratic scale, lever arms
 from __future__ import annotations
 
 import csv
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
-from ...core.errors import InputError, shown
+from ...core.errors import InputError
 from ...core.inputs import check_input_file
-from ...data.tables import read_table
+from ...data.record import check_psd, read_record
 from ...model.registry import NAMES, error_scale, groups_in, model_names, relative_covariance
-from ...report.calibration import companion_paths
 from .model import N_NAV
 from .sources import Sources
 
-#: A covariance CSV or report of a few dozen parameters is small.
+#: A covariance CSV of a few dozen parameters is small.
 MAX_COVARIANCE_BYTES = 20_000_000
-
-
-def check_psd(cov: np.ndarray, path) -> None:
-    """Refuse a covariance that is not symmetric positive semi-definite.
-
-    Raises
-    ------
-    InputError
-        Naming ``path``.
-    """
-    if not np.allclose(cov, cov.T, rtol=1e-9, atol=0.0):
-        raise InputError(path, "the covariance is not symmetric")
-    eig = np.linalg.eigvalsh(cov)
-    if eig.min() < -1e-9 * max(eig.max(), 0.0):
-        raise InputError(path, f"the covariance is not positive semi-definite (smallest eigenvalue {eig.min():.3g})")
 
 
 def read_covariance_csv(path, names: tuple[str, ...]) -> np.ndarray:
@@ -101,41 +84,6 @@ def _reorder(matrix: np.ndarray, given: list[str], names: tuple[str, ...]) -> np
     return out
 
 
-def report_covariance(table_path, names: tuple[str, ...]) -> tuple[np.ndarray | None, Path | None]:
-    """The covariance in the companion report ``NAME.report.json`` of the table ``NAME.csv``, if any.
-
-    Returns
-    -------
-    (ndarray (n, n) or None, Path or None)
-        The matrix (rows in the table's order ``names``, SI) and the report it came from; ``(None,
-        None)`` when there is no report or it has no ``"covariance"`` key.
-
-    Raises
-    ------
-    InputError
-        Naming the report when it cannot be read or its covariance is not an n x n list of finite numbers.
-    """
-    path = companion_paths(table_path)[0]
-    if not path.exists():
-        return None, None
-    check_input_file(path, "calibration report", MAX_COVARIANCE_BYTES)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise InputError(path, f"not a JSON calibration report ({shown(str(exc), 120)})") from None
-    if not isinstance(doc, dict) or "covariance" not in doc:
-        return None, None
-    raw, n = doc["covariance"], len(names)
-    if not (isinstance(raw, list) and len(raw) == n and all(isinstance(r, list) and len(r) == n for r in raw)):
-        raise InputError(path, f"\"covariance\" must be a list of {n} lists of {n} numbers (the table's parameters)")
-    if any(isinstance(x, bool) or not isinstance(x, (int, float)) for r in raw for x in r):
-        raise InputError(path, "\"covariance\" has an entry that is not a number")
-    matrix = np.array(raw, dtype=float)
-    if not np.all(np.isfinite(matrix)):
-        raise InputError(path, "\"covariance\" has non-finite entries")
-    return matrix, path
-
-
 def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sources:
     """Residual errors of a calibrated table: its sigma, or its full covariance (error-state form:
     scale factors relative), with the initial errors and noise of ``sheet`` (none without a sheet).
@@ -154,7 +102,8 @@ def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sourc
         Naming the table, the covariance file or the report at fault.
     """
     table = Path(table)
-    params = read_table(table)
+    record = read_record(table)
+    params = record.table_parameters
     names = params.names
     if params.sigma is None or np.any(np.isnan(params.sigma[: len(NAMES)])):
         missing = NAMES if params.sigma is None else [n for n, s in zip(names, params.sigma) if math.isnan(s)]
@@ -163,14 +112,11 @@ def table_sources(table, covariance=None, sheet: Sources | None = None) -> Sourc
     cov, where = np.diag(np.nan_to_num(params.sigma) ** 2), None
     if covariance is not None:
         cov, where = read_covariance_csv(covariance, names), Path(covariance)
-    else:
-        found, report = report_covariance(table, names)
-        if found is not None:
-            cov, where = found, report
-    if where is not None:
         check_psd(cov, where)
         if not np.allclose(np.sqrt(np.diag(cov))[: len(NAMES)], params.sigma[: len(NAMES)], rtol=1e-3, atol=0.0):
             raise InputError(where, f"its diagonal does not match the sigma of {table}")
+    elif record.covariance is not None:  # checked against the table by the record
+        cov, where = record.covariance, record.report_path
     zero = np.zeros(3)
     try:
         return parameter_sources(names, params.values, cov, zero if sheet is None else sheet.gyro_arw,

@@ -2,7 +2,7 @@
 
 A table ``NAME.csv`` (``parameter,unit,value,sigma``, :func:`data.tables.read_table`) brings its full
 covariance in the companion report ``NAME.report.json`` that ``calibrate`` and ``batch`` write beside
-it (key ``"covariance"``, SI, table order); without one the sigma column alone weighs it (said in a
+it (key ``"covariance"``, SI, table order; read as its record, :mod:`data.record`); without one the sigma column alone weighs it (said in a
 note).  Its temperature, first found of:
 
 1. given on the command line, ``NAME.csv@25`` (degC) or one ``--temperatures`` entry per table;
@@ -12,7 +12,6 @@ note).  Its temperature, first found of:
 
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 
@@ -21,11 +20,8 @@ import numpy as np
 from ...core.errors import InputError, shown
 from ...core.text import decimal_number
 from ...data.conditions import TEMPERATURE_RANGE_C
-from ...data.tables import read_table
+from ...data.record import read_record
 from ...model.parameters import ParameterSet
-from ...report.calibration import companion_paths
-from ...report.provenance import read_provenance
-from ..modulation.calibrated import check_psd, report_covariance
 from .fit import Point
 
 _AT = re.compile(r"^(?P<path>.+)@(?P<t>[-+0-9.eE ]*)$")
@@ -50,16 +46,6 @@ def split_spec(spec: str) -> tuple[str, float | None]:
                          f"{match['path']}@25") from None
 
 
-def report_temperature(table: Path) -> float | None:
-    """The temperature (degC) in the conditions of the table's companion report, if it gives one."""
-    value = read_provenance(table).conditions.get("temperature_c")
-    if value is None:
-        return None
-    if not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(companion_paths(table)[0], f"conditions.temperature_c {shown(value)} is not a number")
-    return float(value)
-
-
 def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, list[str]]:
     """One calibration: its table with covariance and its temperature; notes on what is missing.
 
@@ -70,11 +56,12 @@ def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, li
     """
     path_text, given = split_spec(spec)
     path = Path(path_text)
-    params = read_table(path)
+    record = read_record(path)
+    params, origin = record.table_parameters, record.provenance
     notes = []
     temperature = given if given is not None else temperature_c
     if temperature is None:
-        temperature = report_temperature(path)
+        temperature = record.temperature_c
     if temperature is None:
         raise InputError(path, "no temperature: its report has no conditions.temperature_c; give it as "
                          f"{path_text}@TEMP or with --temperatures")
@@ -83,16 +70,12 @@ def load_point(spec: str, temperature_c: float | None = None) -> tuple[Point, li
         raise InputError(path, f"temperature {temperature:g} degC is outside {low:g}..{high:g} degC (a typo? Kelvin?)")
     if params.sigma is None or np.any(~np.isfinite(params.sigma)):
         raise InputError(path, "no sigma for every parameter: a thermal fit weighs each calibration by it")
-    cov, where = report_covariance(path, params.names)
-    if cov is not None:
-        check_psd(cov, where)
-        if not np.allclose(np.sqrt(np.diag(cov)), params.sigma, rtol=1e-3, atol=0.0):
-            raise InputError(where, f"its covariance's diagonal does not match the sigma of {path}")
-        params = ParameterSet(params.values, covariance=cov, names=params.names)
+    if record.covariance is not None:  # checked against the table by the record
+        params = record.parameters
     else:
         notes.append(f"{path}: no covariance in a companion report; its sigma column alone weighs it "
                      "(correlations between its parameters unknown)")
-    return Point(float(temperature), params, str(path)), notes
+    return Point(float(temperature), params, str(path), _origin(origin)), notes
 
 
 def load_points(specs: list[str], temperatures: list[float] | None = None
@@ -115,33 +98,32 @@ def load_points(specs: list[str], temperatures: list[float] | None = None
         point, more = load_point(spec, None if temperatures is None else temperatures[k])
         points.append(point)
         notes += more
-    origins = [read_provenance(p.label) for p in points]
     seen: dict[str, str] = {}
-    for p, origin in zip(points, origins):
-        for key in (str(Path(p.label).resolve()), origin.recording_sha256):
+    for p in points:
+        for key in (str(Path(p.label).resolve()), p.origin["recording_sha256"]):
             if key and key in seen:
                 raise InputError(p.label, f"the same calibration as {seen[key]} (same table or recording): a thermal "
                                  "fit needs independent calibrations")
             if key:
                 seen[key] = p.label
-    units = {origin.unit_id for origin in origins} - {None}
+    units = {p.origin["unit_id"] for p in points} - {None}
     if len(units) > 1:
         raise InputError(None, f"the tables are of units {', '.join(sorted(units))}: a thermal model is of one unit")
     names = [n for n in points[0].params.names if all(n in p.params.names for p in points)]
     dropped = sorted({n for p in points for n in p.params.names} - set(names))
     if dropped:
         notes.append(f"parameters not in every table left out: {', '.join(dropped)}")
-    points = [Point(p.temperature_c, _subset(p.params, names), p.label, _origin(origin))
-              for p, origin in zip(points, origins)]
+    points = [Point(p.temperature_c, _subset(p.params, names), p.label,
+                    {k: v for k, v in p.origin.items() if k != "unit_id"}) for p in points]
     points.sort(key=lambda p: p.temperature_c)
     return points, notes, next(iter(units), None)
 
 
 def _origin(origin) -> dict:
-    """What the thermal model keeps of a calibration's provenance (:class:`report.provenance.Provenance`)."""
+    """What the thermal model keeps of a calibration's provenance (:class:`data.record.Provenance`), and its unit."""
     return {"table_sha256": origin.table_sha256, "recording_sha256": origin.recording_sha256,
             "calibrated": origin.date.isoformat(timespec="seconds") if origin.from_report else None,
-            "calibrated_with": origin.software}
+            "calibrated_with": origin.software, "unit_id": origin.unit_id}
 
 
 def _subset(params: ParameterSet, names: list[str]) -> ParameterSet:

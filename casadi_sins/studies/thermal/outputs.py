@@ -9,18 +9,18 @@ and the temperature in the keys the calibration report uses (``covariance``, ``c
 from __future__ import annotations
 
 import datetime
-import json
+import hashlib
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ...core.version import build_identity, software_versions
+from ...data.record import CalibrationRecord, report_path
 from ...data.tables import table_text
 from ...data.thermal import write_thermal
 from ...model.registry import GROUPS, natural_size, natural_unit_of, relative_mask
 from ...model.thermal import ThermalModel
-from ...report.calibration import companion_paths, parameter_rows
 from ...report.plots import figure_bytes, pyplot
 from ...report.rounding import format_sigma, format_with_sigma
 from ...report.tables import markdown_table
@@ -84,18 +84,15 @@ def thermal_markdown(fit: ThermalFit, ats: list[float], notes: list[str]) -> str
     return "\n".join(lines) + "\n"
 
 
-def at_report(model: ThermalModel, temperature_c: float, unit_id: str | None) -> dict:
-    """The companion report of a table at a temperature: its covariance and conditions (report keys)."""
-    params = model.at(temperature_c)
-    return {"format": "casadi-sins-report/1", "software": build_identity(),
-            "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "unit_id": unit_id, "solver": "thermal",
-            "message": f"evaluated from the thermal model at {temperature_c:g} degC (reference "
-                       f"{model.reference_c:g} degC, calibrated {model.range_c[0]:g} .. {model.range_c[1]:g} degC)",
-            "conditions": {"temperature_c": float(temperature_c)},
-            "extrapolated": model.extrapolates(temperature_c),
-            "parameters": parameter_rows(params),
-            "covariance": params.covariance.tolist() if params.covariance is not None else None}
+def at_record(model: ThermalModel, temperature_c: float, unit_id: str | None) -> CalibrationRecord:
+    """The record of the table at a temperature (:class:`data.record.CalibrationRecord`): its covariance and the
+    temperature as its conditions, in the keys of a calibration report."""
+    message = (f"evaluated from the thermal model at {temperature_c:g} degC (reference {model.reference_c:g} degC, "
+               f"calibrated {model.range_c[0]:g} .. {model.range_c[1]:g} degC)")
+    return CalibrationRecord.of_calibration(model.at(temperature_c), solver="thermal", unit_id=unit_id,
+                                            conditions={"temperature_c": float(temperature_c)},
+                                            details={"message": message,
+                                                     "extrapolated": model.extrapolates(temperature_c)})
 
 
 def plot_group(fit: ThermalFit, key: str) -> bytes | None:
@@ -153,7 +150,8 @@ def thermal_files(fit: ThermalFit, out: str | Path, ats: list[float], notes: lis
     for t in ats:
         table = out / at_name(t)
         files[table] = table_text(fit.model.at(t)).encode()
-        files[companion_paths(table)[0]] = (json.dumps(at_report(fit.model, t, unit_id), indent=1) + "\n").encode()
+        record = at_record(fit.model, t, unit_id).with_table(table, hashlib.sha256(files[table]).hexdigest())
+        files[report_path(table)] = record.report_json()
     if plots:
         for key in GROUPS:
             png = plot_group(fit, key)

@@ -11,7 +11,8 @@ from casadi_sins.core.errors import InputError
 from casadi_sins.core.units import TO_SI
 from casadi_sins.model.registry import NAMES
 from casadi_sins.studies.modulation import model as M
-from casadi_sins.studies.modulation.calibrated import report_covariance, table_sources
+from casadi_sins.data.record import read_record
+from casadi_sins.studies.modulation.calibrated import table_sources
 from casadi_sins.studies.modulation.covariance import propagate
 from casadi_sins.studies.modulation.schemes import load_scheme
 from casadi_sins.studies.modulation.sources import load_sheet, parse_sheet
@@ -121,9 +122,9 @@ def correlated(sigma, rho=0.5):
 
 def test_the_covariance_of_the_companion_report_is_read(tmp_path):
     table = write_table(tmp_path)
-    assert report_covariance(table, NAMES) == (None, None)  # no report
+    assert read_record(table).covariance is None  # no report
     (tmp_path / "t.report.json").write_text(json.dumps({"solver": "nlp"}))
-    assert report_covariance(table, NAMES) == (None, None)  # a report without a covariance
+    assert read_record(table).covariance is None  # a report without a covariance
     cov, i, j = correlated(table_sigma())
     (tmp_path / "t.report.json").write_text(json.dumps({"solver": "nlp", "covariance": cov.tolist()}))
     src = table_sources(table)

@@ -45,11 +45,8 @@ from ..studies.compare import compare, comparison_display, comparison_files, sum
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
 from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
+from .command import CliError
 from .logs import note, progress_for, steps_printer
-
-
-class CliError(Exception):
-    """A failure to report to the user in one line, with a non-zero exit status."""
 
 
 def cmd_simulate(args) -> int:

@@ -32,7 +32,7 @@ from ..studies.unitcheck import recording_budget, recording_navigation_check
 from .commands import CliError, cmd_budget, cmd_navcheck
 from .inputs import recording_inputs
 from .logs import note, progress_for
-from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
+from .thermal import applied_recording, apply_inputs
 
 
 def cmd_apply(args) -> int:
@@ -209,51 +209,3 @@ def cmd_budget_any(args) -> int:
     print(display(table, sigmas=float_columns(table)).to_string(index=False))
     print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
     return 0
-
-
-def add_production_commands(sub) -> None:
-    """Register ``apply``, ``history`` and ``batch`` on the command line's subparsers."""
-    p = sub.add_parser("apply", help="compensate a recording with a table: the compensated recording (increments "
-                       "in rad and m/s) and its check against gravity and the Earth rate at rest")
-    p.add_argument("table", nargs="?", help="parameter table CSV to apply (not with --thermal)")
-    p.add_argument("recording", nargs="?", help="recording description NAME.toml (raw pulses)")
-    add_thermal_apply_options(p)
-    p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
-                   ".csv/.md")
-    p.set_defaults(func=cmd_apply)
-    p.epilog = ("exit status: 0 the check at rest passed (every static segment within 5 sigma of gravity and the "
-                "Earth rate, noise of the mean and the table's sigma combined); 3 some segment beyond; 2 bad input")
-
-    p = sub.add_parser("history", help="one unit's calibrations by date: change per parameter against the combined "
-                       "sigma (z), drift per year, pass/fail against a tolerance sheet, a plot per group")
-    p.add_argument("tables", nargs="+", help="parameter tables of one unit (each with its companion NAME.report.json "
-                   "from calibrate: unit id, date, recording hash)")
-    p.add_argument("--tolerance", help="tolerance sheet TOML: [change] and [drift_per_year] limits per group or "
-                   "parameter in natural units, z_limit (default 4)")
-    p.add_argument("--out", required=True, help="output folder: history-summary, -changes, -calibrations "
-                   "(CSV, Markdown) and history-GROUP.png")
-    p.set_defaults(func=cmd_history)
-
-    p = sub.add_parser("batch", help="calibrate many units' recordings: a fleet table, the spread per parameter "
-                       "with outliers, each unit's table and report; resumable")
-    p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
-                   "recording's name), or folders: every recording description in them")
-    p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "
-                   "with NAME.report.json/.md")
-    p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address (the workers must "
-                   "read the recordings at the same paths), or 'local'")
-    p.add_argument("--workers", type=int, help="worker processes, local or of the local Dask cluster (default: one "
-                   "per core)")
-    p.add_argument("--solver", default="nlp", choices=["nlp", "ils"], help="solver for every unit (default nlp)")
-    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
-                   help="parameters for every unit (default the paper's 21; see calibrate --model)")
-    p.add_argument("--noise", help="sensor datasheet TOML of the unit type (see calibrate --noise)")
-    p.add_argument("--no-resume", action="store_true", help="calibrate every unit again, even those already done "
-                   "from the same recording")
-    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
-                   "each unit's verdict in the fleet table and its report")
-    p.add_argument("--certificate", nargs="?", const="html", choices=("html", "pdf"),
-                   help="also each unit's certificate, units/NAME.certificate.html (or .pdf with 'pdf'; see calibrate)")
-    p.set_defaults(func=cmd_batch)
-    p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
-                "calibrated but some failed its tolerance sheet")

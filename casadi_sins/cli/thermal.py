@@ -19,25 +19,6 @@ from .commands import CliError, cmd_export, cmd_simulate
 from .logs import note, warning
 
 
-def add_thermal_command(sub) -> None:
-    """The ``thermal`` sub-command and its options."""
-    p = sub.add_parser("thermal", help="a temperature model per parameter from one unit's calibrations at several "
-                       "temperatures: thermal.csv, thermal.md, plots, and tables at chosen temperatures")
-    p.add_argument("tables", nargs="+", metavar="TABLE.csv[@T]",
-                   help="parameter tables of one unit (their NAME.report.json gives the full covariance and the "
-                   "temperature, conditions.temperature_c); NAME.csv@25 gives the temperature (degC) explicitly")
-    p.add_argument("--temperatures", type=float, nargs="+", metavar="T",
-                   help="temperature of each table, degC, in the order of the tables (instead of the reports')")
-    p.add_argument("--order", choices=("auto", "1", "2"), default="auto",
-                   help="polynomial order per parameter: auto (by evidence, default), 1 or 2 for all")
-    p.add_argument("--reference-c", type=float, default=25.0, help="reference temperature T_ref, degC (default 25)")
-    p.add_argument("--at", type=float, nargs="+", default=[], metavar="T",
-                   help="write the parameter table at each temperature T (degC): DIR/at-<T>C.csv (default: none)")
-    p.add_argument("--no-plots", action="store_true", help="leave out the plots")
-    p.add_argument("--out", required=True, help="output folder")
-    p.set_defaults(func=cmd_thermal)
-
-
 def cmd_thermal(args: argparse.Namespace) -> int:
     """``thermal``: fit, write every file together, print the coefficients and the warnings."""
     from ..studies.thermal.fit import fit_thermal  # the thermal modules load only for thermal work
@@ -71,14 +52,6 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     written = ["thermal.csv", "thermal.json", "thermal.md"] + [at_name(t) for t in args.at]
     print(f"wrote {args.out}/{{{','.join(written)}}}" + ("" if args.no_plots else " and plots"))
     return 0
-
-
-def add_thermal_apply_options(p) -> None:
-    """``apply --thermal thermal.csv [--temperature-c T]``: the table of a thermal model at the recording's temperature."""
-    p.add_argument("--thermal", metavar="thermal.csv", help="a thermal model (from thermal) instead of a table: "
-                   "the table at --temperature-c, else at the recording's temperature (its [conditions] "
-                   "temperature_c, or the mean of its temperature column over the rests)")
-    p.add_argument("--temperature-c", type=float, help="temperature of the unit, degC (with --thermal)")
 
 
 def apply_inputs(args) -> tuple[str, str]:

@@ -8,7 +8,7 @@ EXPORT_FORMATS = {
     "json": ("compensation.json", "compensation matrices"),
     "yaml": ("compensation.yaml", "compensation matrices"),
     "psins": ("clbt.m", "the PSINS clbt struct"),
-    "c": ("compensation.h", "a C header for firmware (float64 arrays, inline function)"),
+    "c": ("compensation.h", "a C header for firmware: float64 arrays, inline function"),
 }
 
 

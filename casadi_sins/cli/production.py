@@ -3,8 +3,6 @@ unit's own recording.  Parsing and printing only; the work is in :mod:`studies`.
 
 from __future__ import annotations
 
-import io
-import math
 import sys
 import time
 from pathlib import Path
@@ -20,15 +18,12 @@ from ..core.errors import InputError
 from ..data.tolerance import read_tolerance_sheet
 from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
-from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
-from ..report.tables import frame_files
+from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
 from ..studies.apply import apply_files, check_display, table_with_covariance
 from ..studies.batch import BatchOptions, batch_files, batch_outputs, run_batch, spread_frame, with_outliers
-from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
-from ..studies.navcheck import plot_navigation_check
-from ..studies.unitcheck import recording_budget, recording_navigation_check
+from ..studies.unitcheck import recording_budget_files, recording_navigation_files
 from .commands import CliError, cmd_budget, cmd_navcheck
 from .inputs import recording_inputs
 from .logs import note, progress_for
@@ -158,18 +153,10 @@ def cmd_navcheck_any(args) -> int:
         return cmd_navcheck(args)
     rec = read_recording(args.problem)
     tables = {Path(p).stem: read_table(p).values for p in args.params}
-    runs, table, seg = recording_navigation_check(rec, tables, args.align_s, args.duration_s)
-    out = Path(args.out)
-    stem = rec.file_stem
-    shown = display(table, sigmas=[c for c in float_columns(table) if "error" in c])
-    files = frame_files(table, out / f"{stem}-navcheck", f"{rec.name}: free-inertial navigation on {seg.describe()}, "
-                        f"after {args.align_s:g} s of alignment", display=shown)
-    buffer = io.BytesIO()
-    plot_navigation_check(runs, buffer, f"{rec.name}: horizontal position error at rest, after alignment")
-    files[out / f"{stem}-navcheck.png"] = buffer.getvalue()
+    files, shown = recording_navigation_files(rec, tables, args.out, args.align_s, args.duration_s)
     write_files(files)
     print(shown.to_string(index=False))
-    print(f"wrote {out}/{stem}-navcheck.{{csv,md,png}}")
+    print(f"wrote {args.out}/{rec.file_stem}-navcheck.{{csv,md,png}}")
     return 0
 
 
@@ -187,25 +174,10 @@ def cmd_budget_any(args) -> int:
     params = table_with_covariance(args.params)  # the correlations of its report, when it has one
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
-    correlations = ("with the correlations of its report" if params.covariance is not None
-                    else "sigma only: no companion report, correlations between parameters not known")
-    budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
-    # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
-    noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
-             "deg/sqrt(h)")
-    table = budget.table([3600.0, args.hours * 3600.0] if args.hours != 1.0 else [3600.0])
-    out = Path(args.out)
-    stem = rec.file_stem
-    files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter "
-                        f"uncertainty {correlations}",
-                        display=display(table, sigmas=float_columns(table)))
-    buffer = io.BytesIO()
-    plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
-    files[out / f"{stem}-budget.png"] = buffer.getvalue()
-    write_files(files)
-    print(f"measured white noise: {noise}; "
-          f"orientation {orientation}; parameter uncertainty from {args.params} ({correlations})")
-    print(display(table, sigmas=float_columns(table)).to_string(index=False))
-    print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
+    budget = recording_budget_files(rec, params, args.params, args.out, args.orientation, args.hours)
+    write_files(budget.files)
+    print(f"measured white noise: {budget.noise}; "
+          f"orientation {budget.orientation}; parameter uncertainty from {args.params} ({budget.correlations})")
+    print(budget.shown.to_string(index=False))
+    print(f"wrote {args.out}/{rec.file_stem}-budget.{{csv,md,png}}")
     return 0

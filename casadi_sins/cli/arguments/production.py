@@ -6,6 +6,7 @@ from ...model.catalog import MODELS
 
 
 def apply(p) -> None:
+    """The arguments of ``casadi-sins apply``."""
     p.add_argument("table", nargs="?", help="parameter table CSV to apply (not with --thermal)")
     p.add_argument("recording", nargs="?", help="recording description NAME.toml (raw pulses)")
     p.add_argument("--thermal", metavar="thermal.csv", help="a thermal model (from thermal) instead of a table: "
@@ -17,6 +18,7 @@ def apply(p) -> None:
 
 
 def history(p) -> None:
+    """The arguments of ``casadi-sins history``."""
     p.add_argument("tables", nargs="+", help="parameter tables of one unit (each with its companion NAME.report.json "
                    "from calibrate: unit id, date, recording hash)")
     p.add_argument("--tolerance", help="tolerance sheet TOML: [change] and [drift_per_year] limits per group or "
@@ -26,6 +28,7 @@ def history(p) -> None:
 
 
 def batch(p) -> None:
+    """The arguments of ``casadi-sins batch``."""
     p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
                    "recording's name), or folders: every recording description in them")
     p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "

@@ -11,6 +11,7 @@ RECORDING_HELP = "recording description NAME.toml"
 
 
 def simulate(p) -> None:
+    """The arguments of ``casadi-sins simulate``."""
     p.add_argument("problem", nargs="?", default=None, help="problem file (default: the paper's experiment)")
     p.add_argument("--seed", type=int, default=0, help="random seed of deviations and noise (default 0)")
     p.add_argument("--out", required=True, help="output folder")
@@ -22,21 +23,25 @@ def simulate(p) -> None:
 
 
 def validate(p) -> None:
+    """The arguments of ``casadi-sins validate``."""
     p.add_argument("recording", help=RECORDING_HELP)
 
 
 def rough(p) -> None:
+    """The arguments of ``casadi-sins rough``."""
     p.add_argument("recording", help=RECORDING_HELP)
     p.add_argument("--out", required=True, help="parameter table CSV to write")
 
 
 def navigate(p) -> None:
+    """The arguments of ``casadi-sins navigate``."""
     p.add_argument("recording", help=RECORDING_HELP)
     p.add_argument("--params", nargs="*", help="parameter tables (default: rough initial values)")
     p.add_argument("--out", required=True, help="output folder")
 
 
 def calibrate(p) -> None:
+    """The arguments of ``casadi-sins calibrate``."""
     p.add_argument("recording", help=RECORDING_HELP)
     p.add_argument("--solver", default="nlp", choices=["nlp", "ils"],
                    help="nlp: CasADi/Ipopt over all rotations (default); ils: the paper's iterative least squares")
@@ -54,8 +59,9 @@ def calibrate(p) -> None:
                    help="write a table the calibration's own checks do not trust (by default: exit 2, no table), "
                    "marked: a trust column 'distrusted' in the table, the reasons in the report, exit 4")
     p.add_argument("--model", default=None, choices=MODELS,
-                   help=f"parameters: the paper's 21; extended: also every extra group ({', '.join(extra_group_labels())}); "
-                   "auto: the extra groups the data support (nlp only). Default: 21, and 21 with the "
+                   help="parameters: the paper's 21; extended: also every extra group "
+                   f"({', '.join(extra_group_labels())}); auto: the extra groups the data support (nlp only). "
+                   "Default: 21, and 21 with the "
                    "gyro g-sensitivity for a MEMS unit moved by hand (rests at any orientation)")
     p.add_argument("--export", nargs="+", choices=list(EXPORT_FORMATS),
                    help=f"also write the table in these formats, beside it: {export_formats_help()}")
@@ -73,6 +79,7 @@ def calibrate(p) -> None:
 
 
 def segment(p) -> None:
+    """The arguments of ``casadi-sins segment``."""
     p.add_argument("data", help="the samples, NAME.csv (time, gyro_x..z, accel_x..z), or a description NAME.toml "
                    "without [[segments]] (its site, rate and samples)")
     p.add_argument("--rate", type=float, help="sample rate, Hz (needed for a CSV; default: the description's)")
@@ -87,6 +94,7 @@ def segment(p) -> None:
 
 
 def export(p) -> None:
+    """The arguments of ``casadi-sins export``."""
     p.add_argument("table", help="parameter table CSV (or a thermal model thermal.csv: --format c only)")
     p.add_argument("--format", required=True, choices=list(EXPORT_FORMATS), help=export_formats_help())
     p.add_argument("--out", required=True, help="file to write")
@@ -94,12 +102,14 @@ def export(p) -> None:
 
 
 def compare(p) -> None:
+    """The arguments of ``casadi-sins compare``."""
     p.add_argument("recording", help=RECORDING_HELP)
     p.add_argument("--truth", help="truth table: errors against it in natural units")
     p.add_argument("--out", required=True, help="output folder")
 
 
 def import_(p) -> None:
+    """The arguments of ``casadi-sins import``."""
     p.add_argument("kind", choices=IMPORT_FORMATS, help="psins: [wm vm t] array (.mat variable 'imu' or a text "
                    "file); mat: variables by name; hdf5: datasets by path; parquet: columns by name")
     p.add_argument("src", help="the file to import")
@@ -115,6 +125,7 @@ def import_(p) -> None:
 
 
 def noise(p) -> None:
+    """The arguments of ``casadi-sins noise``."""
     p.add_argument("recording", metavar="STATIC.toml|CSV",
                    help="recording description with one static segment (or none: all at rest), or a bare CSV of "
                    "samples (with --rate)")

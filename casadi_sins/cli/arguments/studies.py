@@ -13,6 +13,7 @@ PROBLEM_HELP = "problem file (default: the paper's experiment)"
 
 
 def analyze(p) -> None:
+    """The arguments of ``casadi-sins analyze``."""
     p.add_argument("inputs", nargs="+", help="problem files or recordings (several: compared side by side)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--accel-vrw-ug-rthz", type=float, help="accelerometer white noise density (velocity random "
@@ -28,6 +29,7 @@ def analyze(p) -> None:
 
 
 def montecarlo(p) -> None:
+    """The arguments of ``casadi-sins montecarlo``."""
     p.add_argument("problem", nargs="?", default=None, help=PROBLEM_HELP)
     p.add_argument("--runs", type=int, default=50, help="number of seeds (default 50)")
     p.add_argument("--first-seed", type=int, default=10000, help="first seed (default 10000)")
@@ -39,6 +41,7 @@ def montecarlo(p) -> None:
 
 
 def navcheck(p) -> None:
+    """The arguments of ``casadi-sins navcheck``."""
     p.add_argument("problem", nargs="?", default=None, metavar="PROBLEM_OR_RECORDING",
                    help="problem file (sensors, truth, noise; default paper), or a recording REC.toml of the unit at "
                    "rest (its longest static segment is navigated)")
@@ -51,6 +54,7 @@ def navcheck(p) -> None:
 
 
 def budget(p) -> None:
+    """The arguments of ``casadi-sins budget``."""
     p.add_argument("problem", nargs="?", default=None, metavar="PROBLEM_OR_RECORDING",
                    help="problem file: site, sensors, noise (default paper); or a recording REC.toml: its site and "
                    "measured noise, with --params")
@@ -63,6 +67,7 @@ def budget(p) -> None:
 
 
 def demo(p) -> None:
+    """The arguments of ``casadi-sins demo``."""
     p.add_argument("problem", nargs="?", default=None, help=PROBLEM_HELP)
     p.add_argument("--seed", type=int, default=1, help="random seed of the simulation (default 1)")
     p.add_argument("--out", default="runs/demo", help="output folder (default runs/demo; the published "
@@ -70,6 +75,7 @@ def demo(p) -> None:
 
 
 def _shipped(kind: str) -> str:
+    """The names of the shipped files of a kind (``"schemes"``, ``"sheets"``), for a help text."""
     return ", ".join(shipped_names(kind))
 
 
@@ -85,6 +91,7 @@ def _residual_errors(p) -> None:
 
 
 def _static_site(p) -> None:
+    """``--hours``, ``--latitude``, ``--height``: the run at a static site."""
     p.add_argument("--hours", type=float, required=True, help="length of the run, h")
     p.add_argument("--latitude", type=float, required=True, help="latitude of the static site, deg")
     p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
@@ -106,6 +113,7 @@ def _modulation_common(p) -> None:
 
 
 def modulate(p) -> None:
+    """The arguments of ``casadi-sins modulate``."""
     _modulation_common(p)
     p.add_argument("--turn-step-deg", type=float, default=5.0,
                    help="largest integration sub-step of a turn, deg (0.01-22.5, default 5)")
@@ -115,6 +123,7 @@ def modulate(p) -> None:
 
 
 def modulate_mc(p) -> None:
+    """The arguments of ``casadi-sins modulate-mc``."""
     _modulation_common(p)
     p.add_argument("--runs", type=int, default=50, help="runs per error source (default 50)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -127,6 +136,7 @@ def modulate_mc(p) -> None:
 
 
 def design_scheme(p) -> None:
+    """The arguments of ``casadi-sins design-scheme``."""
     p.add_argument("--errors", metavar="SHEET", help=f"error sheet: a file or a shipped name ({_shipped('sheets')})")
     p.add_argument("--params", metavar="P.csv", help="calibrated parameter table: design for its residual errors "
                    "(its sigma or covariance); initial errors and noise from --errors, if given")
@@ -148,6 +158,7 @@ def design_scheme(p) -> None:
 
 
 def _angles(text: str) -> tuple[int, ...]:
+    """``--angles 90,180``: whole degrees, sorted, each once."""
     try:
         return tuple(sorted({int(a) for a in text.split(",") if a.strip()}))
     except ValueError:
@@ -155,6 +166,7 @@ def _angles(text: str) -> tuple[int, ...]:
 
 
 def design(p) -> None:
+    """The arguments of ``casadi-sins design``."""
     p.add_argument("problem", help="problem file: the unit, its noise and site, and the schedule to beat")
     p.add_argument("--total-s", type=float, required=True, help="time budget, s: statics + turns + handling")
     p.add_argument("--table-axes", type=int, choices=(1, 2, 3), default=3,
@@ -195,6 +207,7 @@ def design(p) -> None:
 
 
 def thermal(p) -> None:
+    """The arguments of ``casadi-sins thermal``."""
     p.add_argument("tables", nargs="+", metavar="TABLE.csv[@T]",
                    help="parameter tables of one unit (their NAME.report.json gives the full covariance and the "
                    "temperature, conditions.temperature_c); NAME.csv@25 gives the temperature (degC) explicitly")

@@ -10,8 +10,7 @@ from pathlib import Path
 from ..studies.parallel import check_scheduler
 from ..core.files import claim_outputs, write_files
 from ..core.guard import register_inputs
-from ..core.toml import read_toml
-from ..data.description import read_recording
+from ..data.description import is_recording_description, read_recording
 from ..data.segmentation import refine
 from ..data.tables import read_table
 from ..core.errors import InputError
@@ -125,7 +124,7 @@ def batch_recordings(paths) -> list[str]:
         found = []
         for toml in sorted(path.glob("*.toml")):
             try:
-                if not is_recording(toml):
+                if not is_recording_description(toml):
                     print(f"note: {toml}: not a recording description (no format = \"sins-recording/1\"): left "
                           "out of the batch", file=sys.stderr)
                     continue
@@ -140,15 +139,9 @@ def batch_recordings(paths) -> list[str]:
     return out
 
 
-def is_recording(path) -> bool:
-    """Whether a TOML file is a recording description (else a problem file)."""
-    return str(read_toml(path, "problem file or recording description").get("format", "")).startswith(
-        "sins-recording")
-
-
 def cmd_navcheck_any(args) -> int:
     """``navcheck``: on a problem (simulated) or on a unit's recording with its tables."""
-    if not (args.problem and is_recording(args.problem)):
+    if not (args.problem and is_recording_description(args.problem)):
         args.duration_s = 3600.0 if args.duration_s is None else args.duration_s
         return cmd_navcheck(args)
     rec = read_recording(args.problem)
@@ -165,7 +158,7 @@ def cmd_budget_any(args) -> int:
     from ..studies.budget import MAX_HOURS
     if not 0 < args.hours <= MAX_HOURS:
         raise CliError(f"--hours must be a positive number of at most {MAX_HOURS:g} (six weeks), found {args.hours:g}")
-    if not (args.problem and is_recording(args.problem)):
+    if not (args.problem and is_recording_description(args.problem)):
         args.orientation = args.orientation or "ENU"
         return cmd_budget(args)
     if not args.params:

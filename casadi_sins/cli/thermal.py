@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
-from ..core.inputs import first_line
 from ..data.conditions import TEMPERATURE_RANGE_C
+from ..data.thermal import is_thermal_model
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
 from ..core.text import one_line
@@ -69,30 +68,20 @@ def apply_inputs(args) -> tuple[str, str]:
 
 
 def applied_recording(args, table: str, rec) -> Applied:
-    """The recording compensated with the table, or with the thermal model at ``--temperature-c``, else at the
-    recording's ``[conditions] temperature_c``, else sample by sample at its temperature column."""
+    """The recording compensated with the table, or with the thermal model (at ``--temperature-c``, else at the
+    recording's temperature: :func:`studies.thermal.apply.apply_thermal_at_recording`)."""
     from ..data.thermal import read_thermal
-    from ..studies.thermal.apply import apply_thermal
+    from ..studies.thermal.apply import apply_thermal_at_recording
     if not args.thermal:
         return apply_table(rec, table_with_covariance(table))
-    model = read_thermal(table)
-    temperature, source = args.temperature_c, "--temperature-c"
-    if temperature is None and rec.conditions.temperature_c is not None:
-        temperature, source = rec.conditions.temperature_c, "the recording's [conditions]"
-    if temperature is None and rec.temperature is None:
-        raise CliError(f"{rec.label}: no temperature ([conditions] temperature_c or a temperature column): give "
-                       "--temperature-c")
-    applied = apply_thermal(rec, model, temperature)
-    if temperature is not None:
-        applied.notes.insert(0, f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})")
-    return applied
+    return apply_thermal_at_recording(rec, read_thermal(table), table, args.temperature_c, "--temperature-c")
 
 
 def cmd_export_any(args) -> int:
     """``export``: a parameter table (:func:`commands.cmd_export`), or a thermal model as a C header."""
     from ..data.thermal import read_thermal
     from ..report.cheader_thermal import c_header_thermal
-    if not is_thermal_file(args.table):
+    if not is_thermal_model(args.table):
         return cmd_export(args)
     if args.format != "c":
         raise CliError(f"{args.table}: a thermal model exports as --format c (casadi_sins_compensate_t); for the "
@@ -110,14 +99,6 @@ def cmd_export_any(args) -> int:
     atomic_write_text(args.out, text)
     print(f"wrote {args.out} (c, thermal: casadi_sins_compensate_t)")
     return 0
-
-
-def is_thermal_file(path) -> bool:
-    """Whether a CSV is a thermal model (its header has ``p_ref``), not a parameter table."""
-    try:
-        return "p_ref" in first_line(path).split(",")
-    except (OSError, InputError):
-        return False  # read_table names the problem
 
 
 def cmd_simulate_any(args) -> int:

@@ -5,7 +5,12 @@ from __future__ import annotations
 
 #: The pulse columns of a recording's CSV, after ``time`` (the interchange format).
 PULSE_COLUMNS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
-#: The foreign formats ``import`` reads (:mod:`data.importers`).
-IMPORT_FORMATS = ("psins", "mat", "hdf5", "parquet")
+#: The foreign formats ``import`` reads (:mod:`data.importers`): name -> what it reads.
+IMPORT_FORMATS = {
+    "psins": "[wm vm t] array (.mat variable 'imu' or a text file)",
+    "mat": "variables by name",
+    "hdf5": "datasets by path",
+    "parquet": "columns by name",
+}
 #: The names ``import --map KEY=NAME`` takes: the columns, whole three-axis arrays, and a temperature.
 IMPORT_KEYS = ("time",) + PULSE_COLUMNS + ("gyro", "accel", "temperature")

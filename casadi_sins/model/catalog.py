@@ -25,9 +25,12 @@ GROUP_LABELS = {
 }
 #: The paper's six groups (Kang et al. 2013, eq. 1), the 21 parameters; the others are the extra groups.
 PAPER_GROUPS = ("accel_bias", "accel_scale", "accel_misalign", "gyro_bias", "gyro_scale", "gyro_misalign")
-#: The parameter models a calibration takes: the paper's 21, every extra group the schedule determines, or
-#: the extra groups the data support (``auto``, a search: NLP only).
-MODELS = ("21", "extended", "auto")
+#: The parameter models of a fixed parameter list (:data:`model.registry.MODELS`): the paper's 21, and with
+#: every extra group the schedule determines; what a prediction or a design can be made for.
+FIXED_MODELS = ("21", "extended")
+#: The parameter models a calibration takes: the fixed ones, or the extra groups the data support (``auto``, a
+#: search: NLP only).
+MODELS = FIXED_MODELS + ("auto",)
 
 
 def extra_group_labels() -> list[str]:

@@ -110,8 +110,8 @@ def compare(p) -> None:
 
 def import_(p) -> None:
     """The arguments of ``casadi-sins import``."""
-    p.add_argument("kind", choices=IMPORT_FORMATS, help="psins: [wm vm t] array (.mat variable 'imu' or a text "
-                   "file); mat: variables by name; hdf5: datasets by path; parquet: columns by name")
+    p.add_argument("kind", choices=list(IMPORT_FORMATS),
+                   help="; ".join(f"{kind}: {what}" for kind, what in IMPORT_FORMATS.items()))
     p.add_argument("src", help="the file to import")
     p.add_argument("--out", required=True, help="recording description NAME.toml to write (and NAME.csv)")
     p.add_argument("--map", nargs="+", metavar="KEY=NAME", help=f"names in the file for {', '.join(IMPORT_KEYS)} "

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ...model.catalog import MODELS, extra_group_labels
+from ...model.catalog import FIXED_MODELS, extra_group_labels
 from ...studies.choices import DESIGN_CRITERIA, SCHEME_CRITERIA
 from ...studies.modulation.shipped import shipped_names
 
@@ -23,7 +23,7 @@ def analyze(p) -> None:
                    "deg/sqrt(h), as in a --noise datasheet (default: the problem's, or measured in the recording)")
     p.add_argument("--accel-noise-ug", type=float, help="refused (the old per-sample form): use --accel-vrw-ug-rthz")
     p.add_argument("--gyro-noise-deg-h", type=float, help="refused (the old per-sample form): use --gyro-arw-deg-rth")
-    p.add_argument("--model", default="21", choices=MODELS[:2],
+    p.add_argument("--model", default="21", choices=FIXED_MODELS,
                    help="21: the paper's parameters (default); extended: also predict the extra groups of the "
                    f"registry ({', '.join(extra_group_labels())})")
 
@@ -172,7 +172,7 @@ def design(p) -> None:
     p.add_argument("--table-axes", type=int, choices=(1, 2, 3), default=3,
                    help="axes of the turntable: 3 turns about any body axis, 2 about the mount and a horizontal "
                    "(north) axis, 1 about the mount only (other positions need a new group) (default 3)")
-    p.add_argument("--model", default="21", choices=MODELS[:2], help="parameter model (default 21)")
+    p.add_argument("--model", default="21", choices=FIXED_MODELS, help="parameter model (default 21)")
     p.add_argument("--criterion", default="d", choices=DESIGN_CRITERIA,
                    help="d: log det of the predicted covariance (natural units); a: its trace in units of the "
                    "input's variances; worst: the largest sigma ratio to the input; navigation: static "

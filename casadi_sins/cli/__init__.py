@@ -17,7 +17,6 @@ import sys
 import traceback
 import warnings
 
-from ..calibrate.result import CalibrationError
 from ..core import signals
 from ..core.errors import Caution, InputError, OutputError
 from ..core.files import check_writable, claim_outputs, gathered_writes
@@ -25,16 +24,11 @@ from ..core.guard import guarded_inputs, last_input
 from ..core.signals import Terminated
 from ..core.text import one_line
 from ..core.threads import single_threaded
-from .commands import CliError
+from .command import CliError
 from .inputs import command_inputs
 from .outputs import command_outputs
 from .parser import build_parser
-
-#: Commands whose --out is a folder (the others write one file).
-FOLDER_OUTPUTS = {"simulate", "navigate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo", "modulate",
-                  "modulate-mc", "apply", "history", "batch", "thermal", "design-scheme", "design", "noise"}
-#: Commands that write as they go by design (a resumable ledger); every other one writes all at the end.
-INCREMENTAL_OUTPUTS = {"batch"}
+from .registry import command
 
 __all__ = ["main", "build_parser", "CliError", "Terminated"]
 
@@ -117,16 +111,17 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help, --version (0) or a bad argument, told in one line (2)
         return exc.code if isinstance(exc.code, int) else 2
-    name = f"casadi-sins {args.command}"
+    record = command(args.command)
+    name = f"casadi-sins {record.name}"
     try:
         with _termination_handled(), _reader_may_leave(), _warnings_in_our_words(), \
                 guarded_inputs(command_inputs(args)):
+            run = record.function()  # the library loads here, once the arguments are known to be sound
             if getattr(args, "out", None):
-                check_writable(args.out, directory=args.command in FOLDER_OUTPUTS)  # before any computation
-            with single_threaded(), (contextlib.nullcontext() if args.command in INCREMENTAL_OUTPUTS
-                                     else gathered_writes()):
+                check_writable(args.out, directory=record.output == "folder")  # before any computation
+            with single_threaded(), (contextlib.nullcontext() if record.incremental else gathered_writes()):
                 claim_outputs(command_outputs(args))  # what this run owns: never an input, before any computation
-                return args.func(args)
+                return run(args)
     except BaseException as exc:  # noqa: BLE001 (every outcome is one line and a status)
         return _outcome(name, exc)
 
@@ -135,9 +130,11 @@ def _outcome(name: str, exc: BaseException) -> int:
     """The exit status of a command that raised ``exc`` (and its one line on standard error)."""
     if signals.received() and not isinstance(exc, (KeyboardInterrupt, SystemExit)):  # a signal turned into another error
         exc = Terminated() if signals.received() != signal.SIGINT else KeyboardInterrupt()
+    calibration = sys.modules.get("casadi_sins.calibrate.result")  # loaded by the commands that calibrate
+    told = (InputError, OutputError, CliError, *((calibration.CalibrationError,) if calibration else ()))
     try:
         raise exc
-    except (InputError, OutputError, CliError, CalibrationError) as exc:
+    except told as exc:
         return _fail(name, one_line(exc, 2000))
     except Terminated:
         print("terminated", file=sys.stderr)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import os
 import sys
 import time
@@ -16,7 +15,6 @@ from ..calibrate.result import CalibrationError
 from ..calibrate.wander import SENSOR_WORDS, natural_size
 from ..core.earth import Site
 from ..core.text import one_line, plural
-from ..core.version import software_versions
 from ..studies.parallel import check_scheduler
 from ..core.files import atomic_write_text, check_writable, safe_stem, write_files
 from ..data.datasheet import read_datasheet
@@ -24,17 +22,16 @@ from ..model.noise import NOISE_CEILINGS
 from ..core.errors import InputError
 from ..data.description import MAX_NAME, description_from_text, description_toml, read_description, read_recording
 from ..data.problem import load_problem
-from ..data.conditions import conditions_dict
-from ..data.record import parse_report, report_path
 from ..data.samples import read_samples
 from ..data.segmentation import refine, segment_recording
-from ..data.tables import read_table, table_text, write_table
+from ..data.tables import read_table, write_table
 from ..nav.navigation import navigate
 from ..report.acceptance import judge, read_acceptance_sheet
-from ..report.calibration import companion_paths, recording_hash, report_files
-from ..report.exports import EXPORTS, export_files
+from ..report.calibration import companion_paths
+from ..report.calibration_files import calibration_files
+from ..report.exports import EXPORTS
 from ..report.plots import plot_navigation
-from ..report.provenance import conditions_metadata, read_provenance
+from ..report.provenance import read_provenance
 from ..report.rounding import display, float_columns
 from ..report.tables import natural_table, parameter_report, recording_summary, static_velocity_table, write_frame
 from ..sim import simulate, write_simulation
@@ -45,11 +42,8 @@ from ..studies.compare import compare, comparison_display, comparison_files, sum
 from ..studies.demo import run_demo
 from ..studies.navcheck import navigation_check, write_navigation_check
 from ..studies.prediction import analysis_display, predict_file, predict_problem, write_analysis
+from .command import CliError
 from .logs import note, progress_for, steps_printer
-
-
-class CliError(Exception):
-    """A failure to report to the user in one line, with a non-zero exit status."""
 
 
 def cmd_simulate(args) -> int:
@@ -208,19 +202,9 @@ def cmd_calibrate(args) -> int:
                        "written: " + " | ".join(result.distrust)
                        + " (--accept-distrusted writes it, marked, with exit 4)")
     verdict = judge(result.parameters, sheet) if sheet else None
-    files = {Path(args.out): table_text(result.parameters, truth, acceptance=verdict and verdict.outcome,
-                                        distrusted=bool(result.distrust)).encode()}
-    table_sha256 = hashlib.sha256(files[Path(args.out)]).hexdigest()
-    files.update(report_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
-                              unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
-                              table_sha256=table_sha256))
-    report = parse_report(files[report_path(args.out)], report_path(args.out))  # the date and software, as `export`
-    files.update(export_files(result.parameters, args.out, args.export or (), {
-        "unit_id": args.unit_id, "table": str(args.out), "calibrated": report["created"],
-        "calibrated_with": report["software"],
-        "table_sha256": table_sha256, "recording": rec.name, "recording_sha256": recording_hash(rec), "solver": args.solver,
-        "versions": ", ".join(f"{k} {v}" for k, v in software_versions().items()),
-        **conditions_metadata(conditions_dict(rec))}))
+    files, report = calibration_files(result, rec, args.out, args.report, truth, command=" ".join(sys.argv),
+                                      unit_id=args.unit_id, verdict=verdict, certificate=args.certificate,
+                                      exports=args.export or ())
     write_files(files)
     print(natural_table(parameter_report(result, truth)).to_string(index=False))
     print(f"wrote {args.out} and its report ({', '.join(p.name for p in companion_paths(args.out))})"

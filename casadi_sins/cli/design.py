@@ -2,64 +2,10 @@
 
 from __future__ import annotations
 
-import argparse
-
 from ..core.files import write_files
 from ..data.problem import load_problem
-from ..studies.design.criteria import CRITERIA
 from .commands import CliError
 from .logs import message_printer
-
-
-def _angles(text: str) -> tuple[int, ...]:
-    try:
-        return tuple(sorted({int(a) for a in text.split(",") if a.strip()}))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"angles must be whole degrees separated by commas, found {text!r}") from None
-
-
-def add_design_command(sub) -> None:
-    """Register ``design`` with the command line's sub-parsers."""
-    p = sub.add_parser("design", help="design a calibration schedule (positions, turns, dwell times) under a time "
-                       "budget: design.toml, design.md, design.png")
-    p.add_argument("problem", help="problem file: the unit, its noise and site, and the schedule to beat")
-    p.add_argument("--total-s", type=float, required=True, help="time budget, s: statics + turns + handling")
-    p.add_argument("--table-axes", type=int, choices=(1, 2, 3), default=3,
-                   help="axes of the turntable: 3 turns about any body axis, 2 about the mount and a horizontal "
-                   "(north) axis, 1 about the mount only (other positions need a new group) (default 3)")
-    p.add_argument("--model", default="21", choices=["21", "extended"], help="parameter model (default 21)")
-    p.add_argument("--criterion", default="d", choices=CRITERIA,
-                   help="d: log det of the predicted covariance (natural units); a: its trace in units of the "
-                   "input's variances; worst: the largest sigma ratio to the input; navigation: static "
-                   "navigation error after --hours, or with --scheme the largest error of the modulated INS "
-                   "(default d)")
-    p.add_argument("--hours", type=float, default=1.0, help="navigation time of --criterion navigation, h (default 1)")
-    p.add_argument("--scheme", metavar="NAME|FILE",
-                   help="with --criterion navigation: the rotation scheme the unit runs in operation (a shipped "
-                   "name such as dual-axis-16 or yu-ruan2014-improved, or a scheme file); the criterion is then "
-                   "the largest position error of the modulated INS over --hours, as modulate --initial aligned "
-                   "reports it with the problem's white noise")
-    p.add_argument("--max-rate-deg-s", type=float, help="peak turn rate, deg/s (default: the input schedule's)")
-    p.add_argument("--angles", type=_angles, default=(90, 180), help="turn angles allowed, deg (default 90,180)")
-    p.add_argument("--min-rest-s", type=float, default=30.0, help="shortest static, s (default 30)")
-    p.add_argument("--first-rest-s", type=float, default=60.0,
-                   help="shortest first static of a group (its alignment), s (default 60)")
-    p.add_argument("--handling-s", type=float, default=60.0,
-                   help="time to handle the unit between groups, s; counts against --total-s (default 60)")
-    p.add_argument("--cap", type=float, default=1.1,
-                   help="a parameter's sigma above this times the input's is penalised (default 1.1)")
-    p.add_argument("--evaluations", type=int, default=300,
-                   help="orientation sequences scored by the search (default 300; each about 0.5 s)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the search (default 0)")
-    p.add_argument("--verify", type=int, default=0, metavar="N",
-                   help="Monte Carlo of the design: N simulated recordings (seeds from 10000, as montecarlo) "
-                   "calibrated with both solvers; files in OUT/verify/")
-    p.add_argument("--workers", type=int, help="local processes of the Monte Carlo (default one per core)")
-    p.add_argument("--solvers", nargs="+", default=["nlp"], choices=["nlp", "ils"],
-                   help="solvers whose predicted sigma the report gives: the search scores the NLP's (the default "
-                   "solver); with ils also the paper's ILS's on both schedules (default nlp)")
-    p.add_argument("--out", required=True, help="output folder")
-    p.set_defaults(func=cmd_design)
 
 
 def cmd_design(args) -> int:

@@ -14,27 +14,9 @@ import numpy as np
 from ..core.earth import Site
 from ..core.errors import InputError
 from ..data.description import as_read, read_description, write_recording
-from ..data.importers import FORMATS, KEYS, import_samples, imported_recording, parse_map
+from ..data.importers import import_samples, imported_recording, parse_map
 from .commands import CliError, check_name_option, check_rate_option, check_site_options
 from .logs import note
-
-
-def add_import_parser(sub) -> None:
-    """The ``import`` subcommand's arguments."""
-    p = sub.add_parser("import", help="samples of another tool (PSINS [wm vm t], MATLAB .mat, HDF5, Parquet) as a "
-                       "recording (TOML + CSV)")
-    p.add_argument("kind", choices=FORMATS, help="psins: [wm vm t] array (.mat variable 'imu' or a text file); mat: "
-                   "variables by name; hdf5: datasets by path; parquet: columns by name")
-    p.add_argument("src", help="the file to import")
-    p.add_argument("--out", required=True, help="recording description NAME.toml to write (and NAME.csv)")
-    p.add_argument("--map", nargs="+", metavar="KEY=NAME", help=f"names in the file for {', '.join(KEYS)} "
-                   "(default: the keys themselves; gyro/accel: one array of three columns)")
-    p.add_argument("--segments", help="a description to take site, rate, segments and conditions from")
-    p.add_argument("--rate", type=float, help="sample rate, Hz (default: the description's, else the time column's)")
-    p.add_argument("--latitude", type=float, help="latitude of the site, deg (to find the segments without --segments)")
-    p.add_argument("--height", type=float, default=0.0, help="height of the site, m (default 0)")
-    p.add_argument("--name", help="recording name (default: the output's stem)")
-    p.set_defaults(func=cmd_import)
 
 
 def cmd_import(args) -> int:

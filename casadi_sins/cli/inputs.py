@@ -7,18 +7,20 @@ import os
 import tomllib
 from pathlib import Path
 
-#: Arguments that name outputs or are not files.
-NOT_INPUTS = {"out", "report", "func", "command", "dask", "name", "export", "format"}
+from .registry import command
+
 #: A description is a few kilobytes; larger TOML files are not looked into here.
 MAX_LOOK_BYTES = 4_000_000
 
 
 def command_inputs(args) -> list:
-    """Every existing file named by ``args`` (output options excepted), and the ``data`` file of each
-    TOML among them (a recording description's CSV, relative to the description, as ``(path, role)``)."""
+    """Every existing file named by ``args`` (its command's arguments that are no inputs excepted:
+    :meth:`cli.command.Command.is_input`), and the ``data`` file of each TOML among them (a recording
+    description's CSV, relative to the description, as ``(path, role)``)."""
+    record = command(args.command)
     found: list = []
     for key, value in vars(args).items():
-        if key in NOT_INPUTS:
+        if not record.is_input(key):
             continue
         for item in value if isinstance(value, (list, tuple)) else [value]:
             if isinstance(item, (str, Path)) and str(item) and _is_file(item):

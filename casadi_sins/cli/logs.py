@@ -12,13 +12,8 @@ import sys
 
 from ..core.progress import Progress, progress_mode
 
-#: The commands that take long enough to report progress.
-LONG_COMMANDS = ("simulate", "calibrate", "compare", "analyze", "montecarlo", "navcheck", "budget", "demo",
-                 "modulate", "modulate-mc", "batch", "design", "design-scheme", "noise")
-
-
 def add_log_options(p) -> None:
-    """``--quiet`` and ``--no-progress`` on a command's parser."""
+    """``--quiet`` and ``--no-progress`` on a long command's parser (:attr:`cli.command.Command.long`)."""
     p.add_argument("--no-progress", action="store_true", help="no progress bar or progress lines (also: the "
                    "environment variable TQDM_DISABLE=1); without it, a bar on a terminal and a line per 10 %% or "
                    "10 s in a log or file")

@@ -9,28 +9,6 @@ from ..core.files import write_files
 from .logs import progress_for
 
 
-def add_noise_command(sub) -> None:
-    """Register ``noise`` with the command line's sub-parsers."""
-    p = sub.add_parser("noise", help="noise identification from hours at rest: Allan deviation, white noise, "
-                       "quantization and Gauss-Markov bias per axis with uncertainties, plots, and the datasheet "
-                       "calibrate --noise takes")
-    p.add_argument("recording", metavar="STATIC.toml|CSV",
-                   help="recording description with one static segment (or none: all at rest), or a bare CSV of "
-                   "samples (with --rate)")
-    p.add_argument("--rate", type=float, metavar="HZ", help="sample rate of a bare CSV, Hz")
-    p.add_argument("--segment", type=int, metavar="N", help="the static segment of a description with several "
-                   "(its number in file order)")
-    p.add_argument("--params", metavar="P.csv", help="parameter table of the unit (a calibration's): its scale "
-                   "factors put the noise in SI and give the datasheet")
-    p.add_argument("--scale", type=float, nargs=2, metavar=("GYRO", "ACCEL"),
-                   help="nominal pulse weights instead of a table: rad/pulse and m/s/pulse (as a parameter table "
-                   "has them); without --params or --scale the noise is in pulses and no datasheet is written")
-    p.add_argument("--no-plots", action="store_true", help="leave out the Allan deviation plots")
-    p.add_argument("--out", required=True, help="output folder: noise.json, noise.md, allan-gyro.png, "
-                   "allan-accel.png, datasheet.toml")
-    p.set_defaults(func=cmd_noise)
-
-
 def cmd_noise(args) -> int:
     """``noise``: read, identify, write every file together, print the terms."""
     from ..report.noise_identification import shown, units_of

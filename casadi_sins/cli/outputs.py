@@ -10,20 +10,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..data.description import recording_paths
-from ..report.calibration import calibration_outputs
-
-#: Per command, the files it owns from its arguments.
-OWNED = {
-    "calibrate": lambda args: calibration_outputs(args.out),
-    "import": lambda args: recording_paths(args.out),
-    "rough": lambda args: [args.out],
-    "segment": lambda args: [args.out],
-    "export": lambda args: [args.out],
-}
+from .registry import command
 
 
 def command_outputs(args) -> list[Path]:
-    """The files ``args``' command owns (empty for a command that claims its own or writes a folder)."""
-    owned = OWNED.get(args.command)
-    return [Path(p) for p in owned(args)] if owned else []
+    """The files ``args``' command owns (empty for a command that claims its own or writes a folder):
+    :meth:`cli.command.Command.owned` of its ``--out``."""
+    return command(args.command).owned(getattr(args, "out", None))

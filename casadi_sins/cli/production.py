@@ -3,8 +3,6 @@ unit's own recording.  Parsing and printing only; the work is in :mod:`studies`.
 
 from __future__ import annotations
 
-import io
-import math
 import sys
 import time
 from pathlib import Path
@@ -12,27 +10,23 @@ from pathlib import Path
 from ..studies.parallel import check_scheduler
 from ..core.files import claim_outputs, write_files
 from ..core.guard import register_inputs
-from ..core.toml import read_toml
-from ..data.description import read_recording
+from ..data.description import is_recording_description, read_recording
 from ..data.segmentation import refine
 from ..data.tables import read_table
 from ..core.errors import InputError
 from ..data.tolerance import read_tolerance_sheet
 from ..report.acceptance import read_acceptance_sheet
 from ..report.provenance import read_provenance
-from ..report.rounding import display, float_columns, format_sigma, format_with_sigma
-from ..report.tables import frame_files
+from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Z_LIMIT as APPLY_Z_LIMIT
 from ..studies.apply import apply_files, check_display, table_with_covariance
 from ..studies.batch import BatchOptions, batch_files, batch_outputs, run_batch, spread_frame, with_outliers
-from ..studies.budget import plot_budget
 from ..studies.history import history_files, load_history
-from ..studies.navcheck import plot_navigation_check
-from ..studies.unitcheck import recording_budget, recording_navigation_check
+from ..studies.unitcheck import recording_budget_files, recording_navigation_files
 from .commands import CliError, cmd_budget, cmd_navcheck
 from .inputs import recording_inputs
 from .logs import note, progress_for
-from .thermal import add_thermal_apply_options, applied_recording, apply_inputs
+from .thermal import applied_recording, apply_inputs
 
 
 def cmd_apply(args) -> int:
@@ -130,7 +124,7 @@ def batch_recordings(paths) -> list[str]:
         found = []
         for toml in sorted(path.glob("*.toml")):
             try:
-                if not is_recording(toml):
+                if not is_recording_description(toml):
                     print(f"note: {toml}: not a recording description (no format = \"sins-recording/1\"): left "
                           "out of the batch", file=sys.stderr)
                     continue
@@ -145,31 +139,17 @@ def batch_recordings(paths) -> list[str]:
     return out
 
 
-def is_recording(path) -> bool:
-    """Whether a TOML file is a recording description (else a problem file)."""
-    return str(read_toml(path, "problem file or recording description").get("format", "")).startswith(
-        "sins-recording")
-
-
 def cmd_navcheck_any(args) -> int:
     """``navcheck``: on a problem (simulated) or on a unit's recording with its tables."""
-    if not (args.problem and is_recording(args.problem)):
+    if not (args.problem and is_recording_description(args.problem)):
         args.duration_s = 3600.0 if args.duration_s is None else args.duration_s
         return cmd_navcheck(args)
     rec = read_recording(args.problem)
     tables = {Path(p).stem: read_table(p).values for p in args.params}
-    runs, table, seg = recording_navigation_check(rec, tables, args.align_s, args.duration_s)
-    out = Path(args.out)
-    stem = rec.file_stem
-    shown = display(table, sigmas=[c for c in float_columns(table) if "error" in c])
-    files = frame_files(table, out / f"{stem}-navcheck", f"{rec.name}: free-inertial navigation on {seg.describe()}, "
-                        f"after {args.align_s:g} s of alignment", display=shown)
-    buffer = io.BytesIO()
-    plot_navigation_check(runs, buffer, f"{rec.name}: horizontal position error at rest, after alignment")
-    files[out / f"{stem}-navcheck.png"] = buffer.getvalue()
+    files, shown = recording_navigation_files(rec, tables, args.out, args.align_s, args.duration_s)
     write_files(files)
     print(shown.to_string(index=False))
-    print(f"wrote {out}/{stem}-navcheck.{{csv,md,png}}")
+    print(f"wrote {args.out}/{rec.file_stem}-navcheck.{{csv,md,png}}")
     return 0
 
 
@@ -178,7 +158,7 @@ def cmd_budget_any(args) -> int:
     from ..studies.budget import MAX_HOURS
     if not 0 < args.hours <= MAX_HOURS:
         raise CliError(f"--hours must be a positive number of at most {MAX_HOURS:g} (six weeks), found {args.hours:g}")
-    if not (args.problem and is_recording(args.problem)):
+    if not (args.problem and is_recording_description(args.problem)):
         args.orientation = args.orientation or "ENU"
         return cmd_budget(args)
     if not args.params:
@@ -187,73 +167,10 @@ def cmd_budget_any(args) -> int:
     params = table_with_covariance(args.params)  # the correlations of its report, when it has one
     if params.sigma is None:
         raise CliError(f"{args.params}: the table has no sigma column; the budget needs the uncertainty")
-    correlations = ("with the correlations of its report" if params.covariance is not None
-                    else "sigma only: no companion report, correlations between parameters not known")
-    budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, args.orientation, args.hours)
-    # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
-    noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
-             "deg/sqrt(h)")
-    table = budget.table([3600.0, args.hours * 3600.0] if args.hours != 1.0 else [3600.0])
-    out = Path(args.out)
-    stem = rec.file_stem
-    files = frame_files(table, out / f"{stem}-budget", f"{rec.name} with {args.params}: static navigation error by "
-                        f"source at {orientation} (1 sigma, m); measured white noise {noise}; parameter "
-                        f"uncertainty {correlations}",
-                        display=display(table, sigmas=float_columns(table)))
-    buffer = io.BytesIO()
-    plot_budget(budget, buffer, f"{rec.name}: error budget of static navigation at {orientation}")
-    files[out / f"{stem}-budget.png"] = buffer.getvalue()
-    write_files(files)
-    print(f"measured white noise: {noise}; "
-          f"orientation {orientation}; parameter uncertainty from {args.params} ({correlations})")
-    print(display(table, sigmas=float_columns(table)).to_string(index=False))
-    print(f"wrote {out}/{stem}-budget.{{csv,md,png}}")
+    budget = recording_budget_files(rec, params, args.params, args.out, args.orientation, args.hours)
+    write_files(budget.files)
+    print(f"measured white noise: {budget.noise}; "
+          f"orientation {budget.orientation}; parameter uncertainty from {args.params} ({budget.correlations})")
+    print(budget.shown.to_string(index=False))
+    print(f"wrote {args.out}/{rec.file_stem}-budget.{{csv,md,png}}")
     return 0
-
-
-def add_production_commands(sub) -> None:
-    """Register ``apply``, ``history`` and ``batch`` on the command line's subparsers."""
-    p = sub.add_parser("apply", help="compensate a recording with a table: the compensated recording (increments "
-                       "in rad and m/s) and its check against gravity and the Earth rate at rest")
-    p.add_argument("table", nargs="?", help="parameter table CSV to apply (not with --thermal)")
-    p.add_argument("recording", nargs="?", help="recording description NAME.toml (raw pulses)")
-    add_thermal_apply_options(p)
-    p.add_argument("--out", required=True, help="output folder: NAME-compensated.toml/.csv and NAME-compensated-check"
-                   ".csv/.md")
-    p.set_defaults(func=cmd_apply)
-    p.epilog = ("exit status: 0 the check at rest passed (every static segment within 5 sigma of gravity and the "
-                "Earth rate, noise of the mean and the table's sigma combined); 3 some segment beyond; 2 bad input")
-
-    p = sub.add_parser("history", help="one unit's calibrations by date: change per parameter against the combined "
-                       "sigma (z), drift per year, pass/fail against a tolerance sheet, a plot per group")
-    p.add_argument("tables", nargs="+", help="parameter tables of one unit (each with its companion NAME.report.json "
-                   "from calibrate: unit id, date, recording hash)")
-    p.add_argument("--tolerance", help="tolerance sheet TOML: [change] and [drift_per_year] limits per group or "
-                   "parameter in natural units, z_limit (default 4)")
-    p.add_argument("--out", required=True, help="output folder: history-summary, -changes, -calibrations "
-                   "(CSV, Markdown) and history-GROUP.png")
-    p.set_defaults(func=cmd_history)
-
-    p = sub.add_parser("batch", help="calibrate many units' recordings: a fleet table, the spread per parameter "
-                       "with outliers, each unit's table and report; resumable")
-    p.add_argument("recordings", nargs="+", help="recording descriptions NAME.toml, one unit each (unit id: the "
-                   "recording's name), or folders: every recording description in them")
-    p.add_argument("--out", required=True, help="output folder: fleet.csv/.md, fleet-spread.csv/.md, units/NAME.csv "
-                   "with NAME.report.json/.md")
-    p.add_argument("--dask", metavar="SCHEDULER", help="run on a Dask cluster: scheduler address (the workers must "
-                   "read the recordings at the same paths), or 'local'")
-    p.add_argument("--workers", type=int, help="worker processes, local or of the local Dask cluster (default: one "
-                   "per core)")
-    p.add_argument("--solver", default="nlp", choices=["nlp", "ils"], help="solver for every unit (default nlp)")
-    p.add_argument("--model", default="21", choices=["21", "extended", "auto"],
-                   help="parameters for every unit (default the paper's 21; see calibrate --model)")
-    p.add_argument("--noise", help="sensor datasheet TOML of the unit type (see calibrate --noise)")
-    p.add_argument("--no-resume", action="store_true", help="calibrate every unit again, even those already done "
-                   "from the same recording")
-    p.add_argument("--tolerance", metavar="SHEET", help="tolerance sheet TOML with [accept.sigma] / [accept.value]: "
-                   "each unit's verdict in the fleet table and its report")
-    p.add_argument("--certificate", nargs="?", const="html", choices=("html", "pdf"),
-                   help="also each unit's certificate, units/NAME.certificate.html (or .pdf with 'pdf'; see calibrate)")
-    p.set_defaults(func=cmd_batch)
-    p.epilog = ("exit status: 0 every unit calibrated (and passed); 2 some unit failed to calibrate; 3 every unit "
-                "calibrated but some failed its tolerance sheet")

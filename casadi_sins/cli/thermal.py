@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from ..core.errors import InputError
 from ..core.files import atomic_write_text, write_files
-from ..core.inputs import first_line
 from ..data.conditions import TEMPERATURE_RANGE_C
+from ..data.thermal import is_thermal_model
 from ..data.thermal_problem import has_thermal, load_thermal_problem
 from ..model.registry import natural_unit_of
 from ..core.text import one_line
@@ -17,25 +16,6 @@ from ..report.rounding import format_sigma, format_with_sigma
 from ..studies.apply import Applied, apply_table, table_with_covariance
 from .commands import CliError, cmd_export, cmd_simulate
 from .logs import note, warning
-
-
-def add_thermal_command(sub) -> None:
-    """The ``thermal`` sub-command and its options."""
-    p = sub.add_parser("thermal", help="a temperature model per parameter from one unit's calibrations at several "
-                       "temperatures: thermal.csv, thermal.md, plots, and tables at chosen temperatures")
-    p.add_argument("tables", nargs="+", metavar="TABLE.csv[@T]",
-                   help="parameter tables of one unit (their NAME.report.json gives the full covariance and the "
-                   "temperature, conditions.temperature_c); NAME.csv@25 gives the temperature (degC) explicitly")
-    p.add_argument("--temperatures", type=float, nargs="+", metavar="T",
-                   help="temperature of each table, degC, in the order of the tables (instead of the reports')")
-    p.add_argument("--order", choices=("auto", "1", "2"), default="auto",
-                   help="polynomial order per parameter: auto (by evidence, default), 1 or 2 for all")
-    p.add_argument("--reference-c", type=float, default=25.0, help="reference temperature T_ref, degC (default 25)")
-    p.add_argument("--at", type=float, nargs="+", default=[], metavar="T",
-                   help="write the parameter table at each temperature T (degC): DIR/at-<T>C.csv (default: none)")
-    p.add_argument("--no-plots", action="store_true", help="leave out the plots")
-    p.add_argument("--out", required=True, help="output folder")
-    p.set_defaults(func=cmd_thermal)
 
 
 def cmd_thermal(args: argparse.Namespace) -> int:
@@ -73,14 +53,6 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_thermal_apply_options(p) -> None:
-    """``apply --thermal thermal.csv [--temperature-c T]``: the table of a thermal model at the recording's temperature."""
-    p.add_argument("--thermal", metavar="thermal.csv", help="a thermal model (from thermal) instead of a table: "
-                   "the table at --temperature-c, else at the recording's temperature (its [conditions] "
-                   "temperature_c, or the mean of its temperature column over the rests)")
-    p.add_argument("--temperature-c", type=float, help="temperature of the unit, degC (with --thermal)")
-
-
 def apply_inputs(args) -> tuple[str, str]:
     """``(table or thermal model, recording)`` of ``apply``: with ``--thermal`` the one positional is the recording."""
     given = [a for a in (args.table, args.recording) if a is not None]
@@ -96,30 +68,20 @@ def apply_inputs(args) -> tuple[str, str]:
 
 
 def applied_recording(args, table: str, rec) -> Applied:
-    """The recording compensated with the table, or with the thermal model at ``--temperature-c``, else at the
-    recording's ``[conditions] temperature_c``, else sample by sample at its temperature column."""
+    """The recording compensated with the table, or with the thermal model (at ``--temperature-c``, else at the
+    recording's temperature: :func:`studies.thermal.apply.apply_thermal_at_recording`)."""
     from ..data.thermal import read_thermal
-    from ..studies.thermal.apply import apply_thermal
+    from ..studies.thermal.apply import apply_thermal_at_recording
     if not args.thermal:
         return apply_table(rec, table_with_covariance(table))
-    model = read_thermal(table)
-    temperature, source = args.temperature_c, "--temperature-c"
-    if temperature is None and rec.conditions.temperature_c is not None:
-        temperature, source = rec.conditions.temperature_c, "the recording's [conditions]"
-    if temperature is None and rec.temperature is None:
-        raise CliError(f"{rec.label}: no temperature ([conditions] temperature_c or a temperature column): give "
-                       "--temperature-c")
-    applied = apply_thermal(rec, model, temperature)
-    if temperature is not None:
-        applied.notes.insert(0, f"thermal model {table} evaluated at {temperature:.4g} degC (from {source})")
-    return applied
+    return apply_thermal_at_recording(rec, read_thermal(table), table, args.temperature_c, "--temperature-c")
 
 
 def cmd_export_any(args) -> int:
     """``export``: a parameter table (:func:`commands.cmd_export`), or a thermal model as a C header."""
     from ..data.thermal import read_thermal
     from ..report.cheader_thermal import c_header_thermal
-    if not is_thermal_file(args.table):
+    if not is_thermal_model(args.table):
         return cmd_export(args)
     if args.format != "c":
         raise CliError(f"{args.table}: a thermal model exports as --format c (casadi_sins_compensate_t); for the "
@@ -137,14 +99,6 @@ def cmd_export_any(args) -> int:
     atomic_write_text(args.out, text)
     print(f"wrote {args.out} (c, thermal: casadi_sins_compensate_t)")
     return 0
-
-
-def is_thermal_file(path) -> bool:
-    """Whether a CSV is a thermal model (its header has ``p_ref``), not a parameter table."""
-    try:
-        return "p_ref" in first_line(path).split(",")
-    except (OSError, InputError):
-        return False  # read_table names the problem
 
 
 def cmd_simulate_any(args) -> int:

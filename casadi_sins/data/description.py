@@ -39,7 +39,7 @@ from ..core import orientation as orient
 from ..core.earth import Site
 from ..core.errors import InputError, OutputError, shown
 from ..core.files import write_files
-from ..core.toml import array_table_lines, read_toml_text, toml_from_bytes
+from ..core.toml import array_table_lines, read_toml, read_toml_text, toml_from_bytes
 from .conditions import TEMPERATURE_RANGE_C, parse_conditions
 from .recording import FORMAT, Recording, Segment, check_physical_range, check_rate, validate_schedule
 from .samples import REFERENCE_COLUMNS, read_samples, samples_as_read, samples_writer
@@ -339,3 +339,16 @@ def write_recording(rec: Recording, toml_path: str | Path) -> Path:
     """Write ``NAME.toml`` and its CSV (same stem) together; returns the TOML path."""
     write_files(recording_files(rec, toml_path))
     return Path(toml_path)
+
+
+def is_recording_description(path) -> bool:
+    """Whether a TOML file is a recording description (``format = "sins-recording/..."``), not a problem file,
+    a sheet or another kind of TOML.
+
+    Raises
+    ------
+    InputError
+        When the file cannot be read as TOML.
+    """
+    return str(read_toml(path, "problem file or recording description").get("format", "")).startswith(
+        FORMAT.split("/")[0])

@@ -26,13 +26,13 @@ import numpy as np
 
 from ..core.errors import InputError
 from ..core.inputs import check_input_file, check_memory_for, memory_available
+from .formats import IMPORT_FORMATS, IMPORT_KEYS
 from .foreign import ArraySource, ParquetSource, Source, check_declared, hdf5_source, mat_source, sample_axis, text_table
 from .recording import PULSE_COLUMNS, Recording, check_physical_range, check_rate, validate_schedule
 from .samples import MAX_PULSE, check_time
 from .segmentation import segment_recording
 
-FORMATS = ("psins", "mat", "hdf5", "parquet")
-KEYS = ("time",) + PULSE_COLUMNS + ("gyro", "accel", "temperature")
+FORMATS, KEYS = IMPORT_FORMATS, IMPORT_KEYS
 #: Rows read and checked at a time: memory is the arrays read so far plus about one block.
 BLOCK_ROWS = 1 << 18
 

@@ -19,9 +19,9 @@ from ..core.earth import EARTH_RATE, G0, Site
 from ..core.errors import InputError
 from ..core.files import safe_stem
 from .conditions import Conditions
+from .formats import PULSE_COLUMNS
 
 FORMAT = "sins-recording/1"
-PULSE_COLUMNS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 COLUMNS = ("time",) + PULSE_COLUMNS
 #: Two times closer than this fraction of a sample interval are the same instant.
 TIME_TOLERANCE = 1e-3

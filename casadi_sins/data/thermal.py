@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.errors import InputError, shown
-from ..core.inputs import check_input_file
+from ..core.inputs import check_input_file, first_line
 from ..core.units import TO_SI, dimension_of
 from ..model.registry import is_known, unit_of
 from ..model.thermal import ThermalModel
@@ -177,3 +177,12 @@ def _covariance(path: Path, names: list[str], sigma: np.ndarray) -> np.ndarray |
     if not np.allclose(diag, given, rtol=1e-6, atol=1e-300):
         raise InputError(companion, f"its diagonal does not match the sigma columns of {path.name}")
     return cov
+
+
+def is_thermal_model(path) -> bool:
+    """Whether a CSV is a thermal model (its header has ``p_ref``), not a parameter table; False when it
+    cannot be read (the reader of a table then names the problem)."""
+    try:
+        return "p_ref" in first_line(path).split(",")
+    except (OSError, InputError):
+        return False

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .catalog import FIXED_MODELS, GROUP_LABELS, PAPER_GROUPS
 from .groups import cross_quadratic, gyro_asym, gyro_gsens, lever, paper, quadratic, timing
 from .groups.base import ParameterGroup
 
@@ -37,12 +38,16 @@ GROUPS: dict[str, ParameterGroup] = {g.key: g for g in (
 
 CORE_GROUPS = tuple(k for k, g in GROUPS.items() if g.core)
 EXTRA_GROUPS = tuple(k for k, g in GROUPS.items() if not g.core)
+if tuple(GROUPS) != tuple(GROUP_LABELS) or CORE_GROUPS != PAPER_GROUPS:  # the names the help lists (light)
+    raise ImportError("model.catalog does not list the registry's groups in table order: add the new group there")
 #: The paper's 21 names, in the order of the parameter table (and of every parameter vector).
 NAMES = tuple(n for k in CORE_GROUPS for n in GROUPS[k].names)
 N_PARAMS = len(NAMES)
 ALL_NAMES = tuple(n for g in GROUPS.values() for n in g.names)
 #: The parameter models: the paper's 21, and with every extra group.
 MODELS = {"21": (), "extended": EXTRA_GROUPS}
+if tuple(MODELS) != FIXED_MODELS:  # the models the help offers (light)
+    raise ImportError("model.catalog.FIXED_MODELS does not list the registry's models")
 #: Extra groups in the order they are dropped when the schedule cannot separate them.
 DROP_ORDER = tuple(sorted((k for k in EXTRA_GROUPS if GROUPS[k].drop_rank is not None),
                           key=lambda k: GROUPS[k].drop_rank))

@@ -243,7 +243,7 @@ def allan_curve(short: StreamingAllan, blocks: BlockSums, dt: float) -> AllanCur
     block_dt = blocks.size * dt
     first = int(math.floor((tau[-1] if len(tau) else 0.0) / block_dt * (1.0 + 1e-9))) + 1
     rows = []
-    level, merged, stride = 0, sums, 1
+    merged, stride = sums, 1
     for j in log_spans(first, (len(sums) - 1) // 2):
         while 2 * stride * STARTS_PER_SPAN <= j and len(merged) >= 2:  # the next level of the pyramid
             pairs = len(merged) // 2

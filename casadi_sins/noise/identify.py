@@ -46,6 +46,7 @@ import math
 
 import numpy as np
 
+from .allan import AllanCurve
 from .spectrum import Periodogram
 from .terms import AxisTerms
 from .whittle import (Ordinates, crossing, fisher_information, fit_linear, golden_maximum,

@@ -33,7 +33,7 @@ from ..core.version import build_identity
 from ..model.registry import (ACCEL_BIAS, ACCEL_MISALIGN, ACCEL_MISALIGN_ENTRIES, ACCEL_SCALE, GYRO_BIAS,
                               GYRO_MISALIGN, GYRO_MISALIGN_ENTRIES, GYRO_SCALE, N_PARAMS, NAMES)
 from ..model.thermal import ThermalModel
-from .cheader import C99_CHECK, PREFIX, _c_number, _c_string, _comment, comment_lines
+from .cheader import C99_CHECK, PREFIX, _c_number, _c_string, comment_lines
 
 
 def _array(name: str, values) -> str:

@@ -36,6 +36,7 @@ from ..model.output import sensor_matrices
 from ..model.parameters import ParameterSet
 from ..model.registry import EXTRA_GROUPS, GROUPS, N_PARAMS, unit_of
 from .cheader import c_header
+from .export_formats import EXPORT_FORMATS
 
 
 def compensation(params: ParameterSet, metadata: dict | None = None) -> dict:
@@ -149,10 +150,13 @@ def psins_extra_fields(values: dict, k_g_inv: np.ndarray) -> dict:
     return out
 
 
-EXPORTS = {"json": ("compensation.json", lambda p, meta: to_json(compensation(p, meta))),
-           "yaml": ("compensation.yaml", lambda p, meta: to_yaml(compensation(p, meta))),
-           "psins": ("clbt.m", lambda p, meta: psins_clbt(p, metadata=meta)),
-           "c": ("compensation.h", c_header)}
+_WRITERS = {"json": lambda p, meta: to_json(compensation(p, meta)),
+            "yaml": lambda p, meta: to_yaml(compensation(p, meta)),
+            "psins": lambda p, meta: psins_clbt(p, metadata=meta),
+            "c": c_header}
+#: Export format -> (suffix of its file beside the table, writer ``(params, metadata) -> text``), in the order
+#: of :data:`report.export_formats.EXPORT_FORMATS`.
+EXPORTS = {fmt: (suffix, _WRITERS[fmt]) for fmt, (suffix, _) in EXPORT_FORMATS.items()}
 
 
 def export_path(table_path, fmt: str) -> Path:

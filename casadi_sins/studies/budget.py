@@ -21,6 +21,7 @@ noise, and the sensor noise during navigation.
 from __future__ import annotations
 
 import dataclasses
+import io
 from pathlib import Path
 
 import numpy as np
@@ -35,8 +36,8 @@ from ..nav.errorstate import N_NAV, PHI, ErrorModel
 from ..nav.propagation import Propagation, output_pieces, propagate
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
-from ..core.files import safe_stem
-from ..report.tables import write_frame
+from ..core.files import safe_stem, write_files
+from ..report.tables import frame_files
 from ..sim.motion import MotionPiece
 
 #: Longest navigation time of a budget, h (six weeks: beyond, the linear model and the noise model are stretched,
@@ -167,14 +168,22 @@ def drawn_curves(budget: Budget, axis: int) -> tuple[dict[str, np.ndarray], list
     return curves, zero
 
 
+def budget_files(budget: Budget, table: pd.DataFrame, stem: Path, title: str, plot_title: str) -> dict[Path, bytes]:
+    """The files of a budget: its table as ``STEM.csv`` (full precision) and ``STEM.md`` (rounded from sigma,
+    under ``title``), and its plot ``STEM.png`` (under ``plot_title``), for :func:`core.files.write_files`."""
+    files = frame_files(table, stem, title, display=display(table, sigmas=float_columns(table)))
+    buffer = io.BytesIO()
+    plot_budget(budget, buffer, plot_title)
+    files[stem.with_name(f"{stem.name}.png")] = buffer.getvalue()
+    return files
+
+
 def write_budget(budget: Budget, out_dir: str | Path, name: str) -> pd.DataFrame:
     """The budget's table at 1 h and 24 h (CSV, Markdown) and its plot; returns the table."""
     table = budget.table([3600.0, 86400.0])
-    stem = safe_stem(name)
-    write_frame(table, Path(out_dir) / f"{stem}-budget",
-                f"{name}: static navigation error by source after calibration (1 sigma, m)",
-                display=display(table, sigmas=float_columns(table)))
-    plot_budget(budget, Path(out_dir) / f"{stem}-budget.png", f"{name}: error budget of static navigation")
+    write_files(budget_files(budget, table, Path(out_dir) / f"{safe_stem(name)}-budget",
+                             f"{name}: static navigation error by source after calibration (1 sigma, m)",
+                             f"{name}: error budget of static navigation"))
     return table
 
 

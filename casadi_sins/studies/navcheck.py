@@ -9,6 +9,7 @@ reports (< 1 nmile for its real product).
 from __future__ import annotations
 
 import dataclasses
+import io
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +21,8 @@ from ..data.problem import GroupPlan, Problem, Timing
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
 from ..report.plots import legend_outside, pyplot, save_figure
 from ..report.rounding import display, float_columns
-from ..core.files import safe_stem
-from ..report.tables import write_frame
+from ..core.files import safe_stem, write_files
+from ..report.tables import frame_files
 from ..sim import simulate
 
 #: The longest navigation check, in samples of alignment and navigation (27 h at 100 Hz): a simulated static
@@ -81,11 +82,21 @@ def plot_navigation_check(runs: list[NavigationRun], path: str | Path, title: st
     return save_figure(fig, path)
 
 
+def navigation_check_files(runs: list[NavigationRun], table: pd.DataFrame, shown: pd.DataFrame, stem: Path,
+                           title: str, plot_title: str) -> dict[Path, bytes]:
+    """The files of a navigation check: its table as ``STEM.csv`` (full precision) and ``STEM.md`` (``shown``,
+    rounded, under ``title``), and its plot ``STEM.png`` (under ``plot_title``), for
+    :func:`core.files.write_files`."""
+    files = frame_files(table, stem, title, display=shown)
+    buffer = io.BytesIO()
+    plot_navigation_check(runs, buffer, plot_title)
+    files[stem.with_name(f"{stem.name}.png")] = buffer.getvalue()
+    return files
+
+
 def write_navigation_check(runs, table: pd.DataFrame, out_dir: str | Path, name: str) -> None:
     """The check's table (CSV, Markdown) and plot."""
-    out_dir = Path(out_dir)
-    stem = safe_stem(name)
-    write_frame(table, out_dir / f"{stem}-navcheck", f"{name}: 1 h static free-inertial navigation after calibration",
-                display=display(table, sigmas=float_columns(table)))
-    plot_navigation_check(runs, out_dir / f"{stem}-navcheck.png",
-                          f"{name}: horizontal position error, static base, after alignment")
+    write_files(navigation_check_files(runs, table, display(table, sigmas=float_columns(table)),
+                                       Path(out_dir) / f"{safe_stem(name)}-navcheck",
+                                       f"{name}: 1 h static free-inertial navigation after calibration",
+                                       f"{name}: horizontal position error, static base, after alignment"))

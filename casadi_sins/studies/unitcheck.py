@@ -14,6 +14,8 @@ table's sigma, and the orientation of that static segment unless another is give
 from __future__ import annotations
 
 import dataclasses
+import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -25,8 +27,9 @@ from ..data.recording import Recording, Segment
 from ..model.parameters import ParameterSet
 from ..nav.free_inertial import NAUTICAL_MILE, NavigationRun, navigate_free
 from ..noise.raw import estimate_sensor_noise
-from .budget import Budget, error_budget
-from .navcheck import check_durations
+from ..report.rounding import display, float_columns
+from .budget import Budget, budget_files, error_budget
+from .navcheck import check_durations, navigation_check_files
 
 
 def longest_static(rec: Recording) -> Segment:
@@ -111,3 +114,59 @@ def recording_budget(rec: Recording, params: ParameterSet, orientation: str | No
                           rec.site.height, rec.site.g, noise[0], noise[1], rec.rate_hz, duration_s=hours * 3600.0,
                           names=params.names)
     return budget, orientation, noise
+
+
+def recording_navigation_files(rec: Recording, tables: dict[str, np.ndarray], out_dir: str | Path,
+                               align_s: float = 300.0, duration_s: float | None = None
+                               ) -> tuple[dict[Path, bytes], pd.DataFrame]:
+    """``navcheck`` on a unit's recording: :func:`recording_navigation_check` as the files
+    ``OUT/NAME-navcheck.csv/.md/.png`` (for :func:`core.files.write_files`) and the table as shown (errors
+    rounded from their sigma)."""
+    runs, table, seg = recording_navigation_check(rec, tables, align_s, duration_s)
+    shown = display(table, sigmas=[c for c in float_columns(table) if "error" in c])
+    files = navigation_check_files(runs, table, shown, Path(out_dir) / f"{rec.file_stem}-navcheck",
+                                   f"{rec.name}: free-inertial navigation on {seg.describe()}, after {align_s:g} s "
+                                   "of alignment", f"{rec.name}: horizontal position error at rest, after alignment")
+    return files, shown
+
+
+@dataclasses.dataclass(frozen=True)
+class RecordingBudget:
+    """``budget`` on a unit's recording with its table: the files and what the command says of them.
+
+    Attributes
+    ----------
+    files : dict
+        ``OUT/NAME-budget.csv/.md/.png`` for :func:`core.files.write_files`.
+    shown : DataFrame
+        The table at 1 h and at the run's end (1 sigma, m), rounded from its sigma.
+    orientation : str
+        The orientation navigated at.
+    noise : str
+        The measured white noise, as densities (``VRW ... ug/sqrt(Hz) and ARW ... deg/sqrt(h)``).
+    correlations : str
+        Where the parameter correlations come from (the table's companion report, or none).
+    """
+
+    files: dict
+    shown: pd.DataFrame
+    orientation: str
+    noise: str
+    correlations: str
+
+
+def recording_budget_files(rec: Recording, params: ParameterSet, table_label: str, out_dir: str | Path,
+                           orientation: str | None = None, hours: float = 24.0) -> RecordingBudget:
+    """:func:`recording_budget` with the table ``table_label`` as the files of ``budget`` on a recording."""
+    budget, orientation, (accel_ug, gyro_deg_h) = recording_budget(rec, params, orientation, hours)
+    # the noise in the units of a datasheet (densities, as calibrate --noise and analyze take it)
+    noise = (f"VRW {accel_ug * math.sqrt(rec.dt):.3g} ug/sqrt(Hz) and ARW {gyro_deg_h * math.sqrt(rec.dt) / 60:.3g} "
+             "deg/sqrt(h)")
+    correlations = ("with the correlations of its report" if params.covariance is not None
+                    else "sigma only: no companion report, correlations between parameters not known")
+    table = budget.table([3600.0, hours * 3600.0] if hours != 1.0 else [3600.0])
+    files = budget_files(budget, table, Path(out_dir) / f"{rec.file_stem}-budget",
+                         f"{rec.name} with {table_label}: static navigation error by source at {orientation} (1 sigma, "
+                         f"m); measured white noise {noise}; parameter uncertainty {correlations}",
+                         f"{rec.name}: error budget of static navigation at {orientation}")
+    return RecordingBudget(files, display(table, sigmas=float_columns(table)), orientation, noise, correlations)

@@ -180,3 +180,21 @@ def test_a_few_ppm_of_clock_difference_is_a_warning_carried_to_the_report(writte
     rec = read_recording(path)
     assert len(rec.warnings) == 1 and "-5 ppm" in rec.warnings[0] and "r.csv" in rec.warnings[0]
     assert read_recording(written[1]).warnings == []
+
+
+def test_a_recording_description_and_a_thermal_model_are_told_from_their_neighbours(tmp_path):
+    """What a command is handed is sniffed in data/: a recording description (not a problem file), a thermal
+    model (not a parameter table); an unreadable CSV is not a thermal model (its reader names the fault)."""
+    from pathlib import Path
+
+    from casadi_sins.data.description import is_recording_description
+    from casadi_sins.data.thermal import is_thermal_model
+
+    problems = Path(__file__).resolve().parents[2] / "problems"
+    recording = tmp_path / "r.toml"
+    recording.write_text('format = "sins-recording/1"\nname = "r"\n')
+    assert is_recording_description(recording) and not is_recording_description(problems / "kang2013.toml")
+    model, table = tmp_path / "thermal.csv", tmp_path / "t.csv"
+    model.write_text("parameter,unit,p_ref,a1,a2\n")
+    table.write_text("parameter,unit,value,sigma\n")
+    assert is_thermal_model(model) and not is_thermal_model(table) and not is_thermal_model(tmp_path / "none.csv")

@@ -31,6 +31,25 @@ def test_version_needs_no_heavy_library():
     assert loaded_after(code) == set()
 
 
+def test_help_of_every_command_needs_no_heavy_library():
+    """``casadi-sins --help`` and ``casadi-sins CMD --help`` for every command load neither CasADi, pandas,
+    matplotlib, SciPy nor NumPy (one interpreter for all: a command's help must not load what the next one's
+    would then find loaded, so each is checked right after it)."""
+    code = ("import sys, io, contextlib\nfrom casadi_sins.console import run\n"
+            "from casadi_sins.cli.registry import COMMANDS\nheavy = " + repr(HEAVY + ("numpy",)) + "\n"
+            "for argv in [['--help']] + [[c.name, '--help'] for c in COMMANDS]:\n"
+            "    out = io.StringIO()\n"
+            "    with contextlib.redirect_stdout(out):\n"
+            "        assert run(argv) == 0, argv\n"
+            "    assert out.getvalue().startswith('usage: casadi-sins'), argv\n"
+            "    loaded = [m for m in heavy if m in sys.modules]\n"
+            "    assert not loaded, (argv, loaded)\n"
+            "print(len(COMMANDS))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout) >= 20
+
+
 def test_public_names_are_still_reached_from_the_package():
     import casadi_sins
     from casadi_sins import calibrate, read_recording

@@ -86,3 +86,27 @@ def test_apply_thermal_sample_by_sample_at_the_temperature_column(tmp_path):
         dtheta, dv = compensate(rec.gyro[k:k + 1], rec.accel[k:k + 1], model.values_at(round(ramp[k], 2)), rec.dt)
         np.testing.assert_allclose(got.gyro[k], dtheta[0], rtol=1e-12, atol=1e-20)
         np.testing.assert_allclose(got.accel[k], dv[0], rtol=1e-12, atol=1e-20)
+
+
+def test_the_temperature_of_apply_thermal_is_given_else_the_conditions_else_none_refused(tmp_path):
+    """The study chooses the temperature: a given one first (named as the caller names it), then the recording's
+    [conditions]; with neither and no temperature column it refuses, naming the recording and what to give."""
+    import dataclasses
+
+    import pytest
+
+    from casadi_sins.core.errors import InputError
+    from casadi_sins.studies.thermal.apply import apply_thermal_at_recording
+
+    sim = tmp_path / "sim"
+    assert main(["simulate", str(_short_thermal_problem(tmp_path)), "--out", str(sim), "--no-noise"]) == 0
+    rec, model = read_recording(sim / "thermal-kang2013-m30C.toml"), read_thermal(sim / "thermal-truth.csv")
+    given = apply_thermal_at_recording(rec, model, "M.csv", 60.0, "--temperature-c")
+    assert given.notes[0] == "thermal model M.csv evaluated at 60 degC (from --temperature-c)"
+    own = apply_thermal_at_recording(rec, model, "M.csv")
+    assert own.notes[0].endswith("-30 degC (from the recording's [conditions])")
+    assert not np.allclose(given.recording.accel, own.recording.accel, rtol=1e-9, atol=0)
+    bare = dataclasses.replace(rec, conditions=dataclasses.replace(rec.conditions, temperature_c=None),
+                               temperature=None)
+    with pytest.raises(InputError, match="no temperature.*give --temperature-c"):
+        apply_thermal_at_recording(bare, model, "M.csv", given_as="--temperature-c")

@@ -56,6 +56,30 @@ def test_budget_on_the_units_recording_measures_its_noise(static_unit, capsys):
 
 
 @pytest.mark.skipif(importlib.util.find_spec("distributed") is None, reason="dask.distributed not installed")
+def test_the_units_budget_and_navcheck_are_assembled_as_files_nothing_written(static_unit, tmp_path):
+    """The studies return every file of ``budget`` and ``navcheck`` on a recording as bytes (the command only
+    writes them): the CSV reads back as the table in full precision, the plot is a PNG, nothing is on disk."""
+    import io
+
+    from casadi_sins.data.description import read_recording
+    from casadi_sins.data.tables import read_table
+    from casadi_sins.studies.unitcheck import recording_budget_files, recording_navigation_files
+
+    root, rec_path, good, _ = static_unit
+    rec, params = read_recording(rec_path), read_table(good)
+    budget = recording_budget_files(rec, params, "good.csv", tmp_path, hours=2.0)
+    stem = tmp_path / "SN42-static-budget"
+    assert set(budget.files) == {stem.with_suffix(s) for s in (".csv", ".md", ".png")}
+    back = pd.read_csv(io.BytesIO(budget.files[stem.with_suffix(".csv")]))
+    assert list(back.columns) == list(budget.shown.columns) and len(back) == len(budget.shown)
+    assert budget.files[stem.with_suffix(".png")].startswith(b"\x89PNG")
+    assert "good.csv" in budget.files[stem.with_suffix(".md")].decode() and "ARW" in budget.noise
+    files, shown = recording_navigation_files(rec, {"good": params.values}, tmp_path, align_s=300.0)
+    table = pd.read_csv(io.BytesIO(files[tmp_path / "SN42-static-navcheck.csv"]))
+    assert table["navigation time (s)"].iloc[0] == pytest.approx(600.0, abs=1.0) and len(shown) == 1
+    assert not any(tmp_path.iterdir())
+
+
 def test_batch_on_a_local_dask_cluster(tmp_path, short_problem):
     paths = [write_simulation(simulate(short_problem, seed=k, name=f"D{k}"), tmp_path / "rec") for k in range(3)]
     assert main(["batch", *map(str, paths), "--out", str(tmp_path / "out"), "--dask", "local", "--workers", "2"]) == 0

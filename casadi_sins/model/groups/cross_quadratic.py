@@ -13,6 +13,7 @@ import numpy as np
 
 from ...core.earth import G0
 from ..regressors import P2_ROW
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup, value
 
 #: (accelerometer, other axis) of each term, in table order.
@@ -36,7 +37,7 @@ def truth(nodes, values: dict) -> np.ndarray:
     return out
 
 
-GROUP = ParameterGroup("cross_quadratic", "accel cross-quadratic terms", NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
+GROUP = ParameterGroup("cross_quadratic", GROUP_LABELS["cross_quadratic"], NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
                        core=False, regressors=("P2",), correction=correction, truth=truth,
                        needs_rotation_steps=True, drop_rank=4,
                        separated_by="turns that carry gravity across two accelerometer axes (about horizontal axes)",

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.units import PPM
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup, axes, value
 
 NAMES = axes("gyro_scale_asym")
@@ -33,7 +34,7 @@ def c_terms(values: dict, k_g_inv) -> list:
              "scale asymmetry: dtheta -= A_g |dtheta| (per axis, before this term)")]
 
 
-GROUP = ParameterGroup("gyro_asym", "gyro scale-factor asymmetry", NAMES, "ratio", "ppm", PPM, sensor="gyro",
+GROUP = ParameterGroup("gyro_asym", GROUP_LABELS["gyro_asym"], NAMES, "ratio", "ppm", PPM, sensor="gyro",
                        core=False, correction=correction, truth=truth, c_terms=c_terms, needs_rotation_steps=True,
                        drop_rank=5, weak_level=1.0, separated_by="turns of both senses about every axis",
                        meaning="A_i: gyro i outputs A_i |w_i| more (its scale factor is 1 + A_i larger for positive "

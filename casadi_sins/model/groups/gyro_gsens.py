@@ -17,6 +17,7 @@ import numpy as np
 
 from ...core.earth import G0
 from ...core.units import DEG_PER_H
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup, value
 
 NAMES = tuple(f"gyro_gsens_{i}{j}" for i in "xyz" for j in "xyz")
@@ -45,7 +46,7 @@ def c_terms(values: dict, k_g_inv) -> list:
     return [("G_g", k_g_inv @ matrix(values), "g-sensitivity: dtheta -= G_g dv (dv in m/s)")]
 
 
-GROUP = ParameterGroup("gyro_gsens", "gyro g-sensitivity", NAMES, "rad/s/(m/s^2)", "deg/h/g", DEG_PER_H / G0,
+GROUP = ParameterGroup("gyro_gsens", GROUP_LABELS["gyro_gsens"], NAMES, "rad/s/(m/s^2)", "deg/h/g", DEG_PER_H / G0,
                        sensor="gyro", core=False, correction=correction, truth=truth, psins=psins, c_terms=c_terms,
                        drop_rank=6, weak_level=0.01,
                        separated_by="static positions with every axis up and down, and horizontal",

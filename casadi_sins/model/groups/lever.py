@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..regressors import M_ROW
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup
 
 ACROSS = ("accel_x_lever_y", "accel_x_lever_z", "accel_y_lever_x", "accel_y_lever_z")
@@ -57,11 +58,11 @@ def psins(values: dict, k_g_inv) -> dict:
 
 _COMMON = dict(core=False, regressors=("DW", "M"), correction=correction, acceleration=acceleration, truth=truth,
                psins=psins, needs_rotation_steps=True)
-GROUP = ParameterGroup("lever", "accel lever arms across the sensing axes (size effect)", ACROSS, "m", "mm", 1e-3,
+GROUP = ParameterGroup("lever", GROUP_LABELS["lever"], ACROSS, "m", "mm", 1e-3,
                        drop_rank=1, **_COMMON,
                        meaning="position of the x and y accelerometers relative to the z accelerometer (the navigation "
                                "point), across their sensing axes; each senses w_dot x p + w x (w x p) along its axis")
-ALONG_GROUP = ParameterGroup("lever_along", "accel lever arms along the sensing axes", ALONG, "m", "mm", 1e-3,
+ALONG_GROUP = ParameterGroup("lever_along", GROUP_LABELS["lever_along"], ALONG, "m", "mm", 1e-3,
                              drop_rank=0, separated_by="turns about two axes at once", **_COMMON,
                              meaning="position of the x (y) accelerometer along its own axis: seen only through the "
                                      "centripetal term, -(w_y^2 + w_z^2) p_x; single-axis turns make it one with the "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.earth import G0
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup, axes, value
 
 NAMES = axes("accel_quadratic")
@@ -29,7 +30,7 @@ def psins(values: dict, k_g_inv) -> dict:
     return {"Ka2": (np.array([0.0 - value(values, n) for n in NAMES]), "s^2/m")}
 
 
-GROUP = ParameterGroup("quadratic", "accel quadratic scale", NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
+GROUP = ParameterGroup("quadratic", GROUP_LABELS["quadratic"], NAMES, "s^2/m", "ug/g^2", 1e-6 / G0,
                        core=False, regressors=("Q2",), correction=correction, truth=truth, psins=psins, drop_rank=3,
                        separated_by="static positions with every accelerometer axis vertical and horizontal",
                        meaning="k2 of each accelerometer: its output is a + k2 a^2 for the sensed specific force a")

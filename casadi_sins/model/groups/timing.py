@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..catalog import GROUP_LABELS
 from .base import ParameterGroup, value
 
 NAMES = ("accel_time_offset",)
@@ -28,7 +29,7 @@ def psins(values: dict, k_g_inv) -> dict:
     return {"tGA": (np.array(float(value(values, NAMES[0]))), "s")}
 
 
-GROUP = ParameterGroup("timing", "gyro/accel time offset", NAMES, "s", "ms", 1e-3, core=False, weak_level=0.2,
+GROUP = ParameterGroup("timing", GROUP_LABELS["timing"], NAMES, "s", "ms", 1e-3, core=False, weak_level=0.2,
                        regressors=("X",), correction=correction, shift=shift, psins=psins,
                        needs_rotation_steps=True, drop_rank=2,
                        meaning="the accelerometer samples describe the specific force this much later than the gyro "

@@ -32,9 +32,10 @@ from ...calibrate.nlp.graph import variable_scale
 from ...data.problem import Problem
 from ...model.registry import N_PARAMS
 from ..budget import problem_budget
+from ..choices import DESIGN_CRITERIA
 from ..prediction import Prediction, predict_problem
 
-CRITERIA = ("d", "a", "worst", "navigation")
+CRITERIA = DESIGN_CRITERIA
 #: Weight of the log excess of a parameter's sigma over ``cap`` times the input's.
 PENALTY = 10.0
 

@@ -28,13 +28,14 @@ import numpy as np
 from ...core import units
 from ...core.earth import Site
 from ...core.errors import InputError
+from ..choices import SCHEME_CRITERIA
 from . import model as M
 from .covariance import check_run
 from .schemes import Scheme, Step, still, turn
 from .sources import Sources
 from .tilt import mean_radius, piece_moments
 
-CRITERIA = ("position", "velocity", "final")
+CRITERIA = SCHEME_CRITERIA
 #: Start phases tried: the still time before the first turn, as fractions of a stop.
 PHASES = (0.0, 0.25, 0.5, 0.75, 1.0)
 AXIS_BIT = {"x": 1, "y": 2, "z": 3}

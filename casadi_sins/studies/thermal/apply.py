@@ -14,6 +14,7 @@ import dataclasses
 
 import numpy as np
 
+from ...core.errors import InputError
 from ...data.recording import Recording
 from ...model.output import compensate
 from ...model.registry import N_PARAMS
@@ -53,6 +54,29 @@ def apply_thermal(rec: Recording, model: ThermalModel, temperature_c: float | No
                      "sample")
     middle = model.at(model.clamped(float(np.mean(temps))))  # the table's sigma at the recording's mean temperature
     return Applied(compensated, judged_check(static_check(compensated), table_sigma(rec, middle)), notes)
+
+
+def apply_thermal_at_recording(rec: Recording, model: ThermalModel, model_label: str,
+                               temperature_c: float | None = None, given_as: str = "the given temperature") -> Applied:
+    """``apply --thermal``: ``rec`` compensated with ``model`` at ``temperature_c`` when given, else at the
+    recording's ``[conditions] temperature_c``, else sample by sample at its temperature column; a note says
+    which (``given_as``: how the caller names a given temperature, such as its option).
+
+    Raises
+    ------
+    InputError
+        When there is no temperature at all (none given, no conditions, no temperature column).
+    """
+    temperature, source = temperature_c, given_as
+    if temperature is None and rec.conditions.temperature_c is not None:
+        temperature, source = rec.conditions.temperature_c, "the recording's [conditions]"
+    if temperature is None and rec.temperature is None:
+        raise InputError(rec.label, f"no temperature ([conditions] temperature_c or a temperature column): give "
+                         f"{given_as}")
+    applied = apply_thermal(rec, model, temperature)
+    if temperature is not None:
+        applied.notes.insert(0, f"thermal model {model_label} evaluated at {temperature:.4g} degC (from {source})")
+    return applied
 
 
 def _range_notes(model: ThermalModel, temps: np.ndarray) -> list[str]:

@@ -44,4 +44,19 @@ def console() -> None:
             raise
         print("terminated" if status == signals.TERMINATED else "interrupted", file=sys.stderr)
     signals.ignore_all()
+    _forget_handled_interrupt()
     sys.exit(status)
+
+
+def _forget_handled_interrupt() -> None:
+    """Clear CPython's record of a KeyboardInterrupt that escaped code it ran for a C extension (``PyRun_*``
+    during an import) and that we then handled: CPython 3.11 keeps it and ends the process by SIGINT at exit
+    (status -2 instead of ours; seen in about 1 of 15 Ctrl-Cs during the imports on a loaded machine). Where the
+    record cannot be reached (a CPython that keeps it elsewhere, 3.12 and later), nothing is done."""
+    import ctypes  # noqa: PLC0415 (only at the exit)
+
+    try:
+        flag = ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt")
+    except (ValueError, AttributeError, OSError):
+        return
+    flag.value = 0

@@ -36,8 +36,10 @@ __all__ = ["main", "build_parser", "CliError", "Terminated"]
 @contextlib.contextmanager
 def _termination_handled():
     """SIGTERM and SIGHUP raise :class:`Terminated`, SIGINT KeyboardInterrupt, in the main thread while the
-    command runs; each is remembered (:func:`..core.signals.received`)."""
-    signals.reset()
+    command runs; each is remembered (:func:`..core.signals.received`). A signal the console script's own
+    handlers received before (during the start-up) is kept: the command then ends at its first check."""
+    if not signals.installed():  # a command run in-process (not from the console script): a fresh start
+        signals.reset()
     previous = signals.install()
     try:
         yield
@@ -117,11 +119,14 @@ def main(argv: list[str] | None = None) -> int:
         with _termination_handled(), _reader_may_leave(), _warnings_in_our_words(), \
                 guarded_inputs(command_inputs(args)):
             run = record.function()  # the library loads here, once the arguments are known to be sound
+            signals.raise_if_received()  # a signal an import swallowed still ends the command
             if getattr(args, "out", None):
                 check_writable(args.out, directory=record.output == "folder")  # before any computation
             with single_threaded(), (contextlib.nullcontext() if record.incremental else gathered_writes()):
                 claim_outputs(command_outputs(args))  # what this run owns: never an input, before any computation
-                return run(args)
+                status = run(args)
+                signals.raise_if_received()  # asked to stop, even if a library swallowed it: nothing is written
+                return status
     except BaseException as exc:  # noqa: BLE001 (every outcome is one line and a status)
         return _outcome(name, exc)
 

@@ -72,6 +72,20 @@ def install() -> dict:
     return previous
 
 
+def installed() -> bool:
+    """Whether our handlers are in place already (the console script installs them before any import)."""
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGTERM) is _handler)
+
+
+def raise_if_received() -> None:
+    """Raise what a signal received so far raises (:class:`Terminated` or KeyboardInterrupt), even when the
+    exception it raised was swallowed on the way (a library's ``except:`` around an import, C code that
+    clears the error): a command that was asked to stop never writes its outputs."""
+    if _received:
+        raise Terminated(signal.Signals(_received).name) if _received != signal.SIGINT else KeyboardInterrupt
+
+
 def restore(previous: dict) -> None:
     """Put back the handlers :func:`install` replaced."""
     for sig, old in previous.items():

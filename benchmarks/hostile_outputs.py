@@ -383,9 +383,11 @@ def _numbers(value):
 
 # ----- child classes: declared-size bombs, signals around workers -------------------------------------------------
 
-#: The command line in a child that reports its peak memory as its last line of standard error.
-PEAK = ("import resource, sys\nfrom casadi_sins.cli import main\nstatus = main(sys.argv[1:])\n"
-        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, file=sys.stderr)\nsys.exit(status)")
+#: The command line in a child that reports its own peak memory (MB) as its last line of standard error: the new
+#: process image's ``VmHWM`` (Linux carries the parent's peak into ``ru_maxrss`` across fork and exec).
+PEAK = ("import sys\nfrom casadi_sins.cli import main\nstatus = main(sys.argv[1:])\n"
+        "print(next(float(l.split()[1]) / 1024 for l in open('/proc/self/status') if l.startswith('VmHWM:')), "
+        "file=sys.stderr)\nsys.exit(status)")
 
 
 def declared_bombs(folder, toml, csv, rng, outcome):

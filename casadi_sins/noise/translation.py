@@ -60,14 +60,20 @@ class MotionLine:
         return 1.0 / self.frequency_hz
 
     @property
+    def amplitude(self) -> float:
+        """Amplitude of the acceleration along the motion, m/s^2: its parts along and across gravity together (a
+        surge at a heading between two body axes is larger than either axis shows)."""
+        return max(self.acceleration, float(np.hypot(self.vertical, self.horizontal)))
+
+    @property
     def displacement(self) -> float:
         """Amplitude of the displacement it makes, m."""
-        return self.acceleration / (2.0 * np.pi * self.frequency_hz) ** 2
+        return self.amplitude / (2.0 * np.pi * self.frequency_hz) ** 2
 
     @property
     def velocity(self) -> float:
         """Amplitude of the velocity it makes, m/s."""
-        return self.acceleration / (2.0 * np.pi * self.frequency_hz)
+        return self.amplitude / (2.0 * np.pi * self.frequency_hz)
 
 
 @dataclasses.dataclass
@@ -109,9 +115,9 @@ class LinearMotion:
         if not self.moving:
             return None
         periods = np.array([line.period_s for line in self.lines])
-        strongest = max(self.lines, key=lambda line: line.acceleration)
+        strongest = max(self.lines, key=lambda line: line.amplitude)
         return (f"the base moved linearly (heave, surge: a deck or a vehicle): accelerations up to "
-                f"{strongest.acceleration / 9.80665 * 1e3:.3g} mg, displacements up to "
+                f"{strongest.amplitude / 9.80665 * 1e3:.3g} mg, displacements up to "
                 f"{max(line.displacement for line in self.lines) * 100:.3g} cm and velocities up to "
                 f"{max(line.velocity for line in self.lines) * 1e3:.3g} mm/s at periods "
                 f"{periods.min():.3g}-{periods.max():.3g} s ({self.significance:.3g} standard errors above the "

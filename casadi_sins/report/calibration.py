@@ -260,7 +260,7 @@ def _linear_motion_dict(linear) -> dict | None:
     return {"moving": bool(linear.moving), "significance": float(linear.significance), "excess": float(linear.excess),
             "description": linear.describe(),
             "lines": [{"segment": line.segment, "period_s": line.period_s,
-                       "acceleration_mg": line.acceleration / 9.80665 * 1e3, "displacement_cm": line.displacement * 100,
+                       "acceleration_mg": line.amplitude / 9.80665 * 1e3, "displacement_cm": line.displacement * 100,
                        "velocity_mm_s": line.velocity * 1e3} for line in linear.lines] if linear.moving else []}
 
 

@@ -8,7 +8,7 @@ import pytest
 from casadi_sins.calibrate.initial import rough_parameters
 from casadi_sins.core.rotations import rotation_matrices
 from casadi_sins.noise.plan import plan_noise
-from casadi_sins.noise.translation import base_acceleration, detrended, motion_bands
+from casadi_sins.noise.translation import MotionLine, base_acceleration, detrended, motion_bands
 
 G = 9.8
 DT = 0.01
@@ -59,6 +59,18 @@ def test_a_deck_is_found_with_its_periods_and_size_and_a_still_or_swaying_base_i
     assert all(np.min(np.abs(found - f)) < 1e-3 for f in true_f)
     peak = np.max(truth.amplitude * truth.omega**2)
     assert max(line.acceleration for line in linear.lines) == pytest.approx(peak, rel=0.05)
+    assert max(line.amplitude for line in linear.lines) == pytest.approx(peak, rel=0.05)
     sway = simulate(kang_problem.with_changes(sway_amplitude_arcsec=(20.0, 63.0), sway_period_s=(3.0, 17.0)), seed=7)
     for still in (kang_sim.recording, sway.recording):
         assert not plan_noise(still, rough_parameters(still).values).linear.moving
+
+
+def test_a_surge_between_two_body_axes_is_told_at_its_full_size():
+    """A surge of 13.6 mg at a heading of 52 deg from a body axis shows 10.7 mg on the larger axis; the line's
+    amplitude, displacement and velocity are those of the whole surge (an independent simulator's deck)."""
+    surge, heading, f = 13.6e-3 * 9.80665, np.radians(52.0), 1.0 / 6.0
+    axes = surge * np.abs([np.cos(heading), np.sin(heading)])
+    line = MotionLine(1, f, float(axes.max()), vertical=0.0, horizontal=float(np.hypot(*axes)))
+    assert line.amplitude == pytest.approx(surge)
+    assert line.displacement == pytest.approx(surge / (2 * np.pi * f) ** 2)
+    assert line.velocity == pytest.approx(surge / (2 * np.pi * f))

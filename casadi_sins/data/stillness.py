@@ -61,6 +61,13 @@ CREEP_PASSES = 8
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
 RATE_OUTLIER = 10.0
 RATE_OUTLIER_FLOOR = 1.0
+#: Seconds of rest whose angle sets its tremor band, and the departure (in bands) whose time fixes a move's onset.
+BAND_S = 2.0
+EXIT_BANDS = 1.0
+EXIT_LEVELS = 8.0
+BACK = 1.0
+#: The most a rest's edge is moved back by its band exit (s): a hand's slow start hidden in the tremor lasts no longer.
+BAND_REACH_S = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -213,12 +220,22 @@ def _creep_end(rates: np.ndarray, span: int) -> int:
     # its pace from the angle's increments over blocks of a quarter second (a tremor's swings cancel in them)
     scatter = np.std(residual[span:], axis=0)
     block = max(2, min(span // 4, len(track) // 8))
-    increments = np.diff(residual[span::block], axis=0)
-    walk = np.mean(increments**2, axis=0) / block if len(increments) else np.zeros(residual.shape[1])
+    walk = _walk_pace(residual[span:], block)
     spread = np.sqrt(scatter[None, :] ** 2 + walk[None, :] * (span - k[:span])[:, None])
     spread += 1e-12 * (np.max(np.abs(track), axis=0) + 1e-300)
     stray = np.flatnonzero(np.any(np.abs(residual[:span]) > CREEP_SIGMAS * spread, axis=1))
     return int(stray[-1]) + 1 if len(stray) else 0
+
+
+def _walk_pace(angle: np.ndarray, lag: int) -> np.ndarray:
+    """The pace (variance per sample, per column) of the random walk in ``angle`` (rows in time): the mean square of
+    its increments grows by the pace times the lag, while a tremor's swings and white noise add the same to every
+    lag, so the difference between the increments over ``2 lag`` and over ``lag`` holds the walk alone."""
+    if len(angle) <= 2 * lag:
+        return np.zeros(angle.shape[1])
+    short = np.mean((angle[lag:] - angle[:-lag]) ** 2, axis=0)
+    long = np.mean((angle[2 * lag:] - angle[:-2 * lag]) ** 2, axis=0)
+    return np.maximum(long - short, 0.0) / lag
 
 
 def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: int, n: int, rate_hz: float):
@@ -230,9 +247,49 @@ def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: i
         return first, stop
     if moving_before > 0:
         first = max(first, motion_end(track, stop - settle, moving_before - 1, rate_hz).safe)
+        last = len(track) - 1
+        first = max(first, last - _band_exit(track.reversed(), last - stop + settle, last - first, last - moving_before + 1,
+                                             rate_hz))
     if moving_after < n:
         stop = min(stop, motion_start(track, first + settle, moving_after, rate_hz).safe)
+        stop = min(stop, _band_exit(track, first + settle, stop, moving_after, rate_hz))
     return first, max(first, stop)
+
+
+def _band_exit(track, rest_first: int, edge: int, moving: int, rate_hz: float) -> int:
+    """The last boundary a rest ending at ``edge`` may reach before the motion surely seen at ``moving`` (indices of
+    ``track``, rest first): where the motion's angle, extrapolated back through the rest's tremor band, began.
+
+    The rest's angle follows a line within a band (tremor, noise: the largest residual per axis over
+    :data:`BAND_S` before ``edge`` less a settling second); a hand's move leaves it slowly, like ``(t - t0)^3`` at
+    the slowest (minimum jerk), its first tenths of a degree hidden in the band.  Where the angle leaves the band
+    for good (``te``) and where it first reaches :data:`EXIT_LEVELS` bands (``t8``) fix the onset of that law:
+    ``t0 = te - (t8 - te) / (EXIT_LEVELS^(1/3) - 1)``; a faster start (a turn at finite acceleration, a wobble)
+    began later, so ``t0`` is on the rest's side.  ``edge`` when the angle never leaves the band that far."""
+    span = int(round(BAND_S * rate_hz))
+    fit_stop = edge - min(int(round(rate_hz)), max(0, (edge - rest_first) // 2))
+    lo = max(rest_first, fit_stop - span)
+    hi = min(len(track) - 1, moving + int(round(rate_hz)))
+    if fit_stop - lo < MIN_CREEP_SAMPLES or hi <= fit_stop:
+        return edge
+    y = track.window(lo, hi)
+    k = np.arange(len(y), dtype=float)
+    rest = slice(0, fit_stop - lo + 1)
+    coef = np.polynomial.polynomial.polyfit(k[rest], y[rest], 1)
+    residual = y - np.polynomial.polynomial.polyval(k, coef).T
+    band = np.max(np.abs(residual[rest]), axis=0)
+    band = np.maximum(band, 1e-12 * (np.max(np.abs(y), axis=0) + 1e-300))
+    walk = _walk_pace(residual[rest], max(2, (fit_stop - lo) // 8))
+    beyond = np.maximum(k - (fit_stop - lo), 0.0)[:, None]
+    level = np.max(np.abs(residual) / np.sqrt(band**2 + walk * beyond), axis=1)
+    level[rest] = 0.0
+    far = np.flatnonzero(level >= EXIT_LEVELS * EXIT_BANDS)
+    if not len(far):
+        return edge
+    inside = np.flatnonzero(level[:far[0]] <= EXIT_BANDS)
+    exit_ = int(inside[-1]) if len(inside) else fit_stop - lo
+    onset = exit_ - BACK * (far[0] - exit_) / (EXIT_LEVELS ** (1.0 / 3.0) - 1.0)
+    return min(edge, max(rest_first, edge - int(round(BAND_REACH_S * rate_hz)), lo + int(math.floor(onset))))
 
 
 def _without_spins(gyro: np.ndarray, spans, quiet_gyro: np.ndarray):

@@ -19,7 +19,9 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
    where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its spread (its scatter about
    the line there, and the random walk it takes so far off); then placed at the fitted onset of the motion
    beside it (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle
-   departs from the rest's line, which takes any offset; the slow start of a move shows there first).
+   departs from the rest's line, which takes any offset; the slow start of a move shows there first); and at
+   the latest where that angle, traced back along a minimum-jerk start, left the rest's tremor band
+   (:func:`_band_exit`: a trembling hand hides the first tenths of a degree of a move from the onset fit).
 5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
    about the vertical): its mean gyro rate then stands off the others.  Rests whose mean rate differs from
    the median of all rests by more than :data:`RATE_OUTLIER` times the rests' spread are taken for motion.
@@ -61,12 +63,11 @@ CREEP_PASSES = 8
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
 RATE_OUTLIER = 10.0
 RATE_OUTLIER_FLOOR = 1.0
-#: Seconds of rest whose angle sets its tremor band, and the departure (in bands) whose time fixes a move's onset.
+#: Seconds of rest whose gyro-integrated angle sets its tremor band; the departure (in bands) whose time after the
+#: band's exit fixes a move's onset; the longest a hand's move may take from the band to that departure, traced back
+#: (s): a slower departure is a settling creep or a drift, left to the creep test and the onset fit.
 BAND_S = 2.0
-EXIT_BANDS = 1.0
 EXIT_LEVELS = 8.0
-BACK = 1.0
-#: The most a rest's edge is moved back by its band exit (s): a hand's slow start hidden in the tremor lasts no longer.
 BAND_REACH_S = 0.5
 
 
@@ -217,7 +218,7 @@ def _creep_end(rates: np.ndarray, span: int) -> int:
     residual = track - design @ coef
     # at rest the angle scatters about the line (tremor, noise) and walks off it (the rate's white noise): its
     # spread is that scatter, and a random walk grown with the distance from the stretch the line was fitted on,
-    # its pace from the angle's increments over blocks of a quarter second (a tremor's swings cancel in them)
+    # its pace from the growth of the angle's increments with their lag (a tremor's swings add alike to every lag)
     scatter = np.std(residual[span:], axis=0)
     block = max(2, min(span // 4, len(track) // 8))
     walk = _walk_pace(residual[span:], block)
@@ -241,7 +242,8 @@ def _walk_pace(angle: np.ndarray, lag: int) -> np.ndarray:
 def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: int, n: int, rate_hz: float):
     """A rest's edges at the fitted onsets of the motion beside it (:mod:`data.edges`: the gyro-integrated angle
     departs from the rest's line, far more sensitive than any moving statistic to the slow start of a move), on
-    the rest's safe side; an edge of the recording stays."""
+    the rest's safe side, and no later than where the move left the rest's tremor band (:func:`_band_exit`, the
+    end of a move as the start of one backwards in time); an edge of the recording stays."""
     settle = min(int(round(rate_hz)), (stop - first) // 4)
     if settle < 1:
         return first, stop
@@ -265,7 +267,10 @@ def _band_exit(track, rest_first: int, edge: int, moving: int, rate_hz: float) -
     the slowest (minimum jerk), its first tenths of a degree hidden in the band.  Where the angle leaves the band
     for good (``te``) and where it first reaches :data:`EXIT_LEVELS` bands (``t8``) fix the onset of that law:
     ``t0 = te - (t8 - te) / (EXIT_LEVELS^(1/3) - 1)``; a faster start (a turn at finite acceleration, a wobble)
-    began later, so ``t0`` is on the rest's side.  ``edge`` when the angle never leaves the band that far."""
+    began later, so ``t0`` is on the rest's side.  The band widens beyond the fitted stretch by the random walk it
+    measured (:func:`_walk_pace`).  ``edge`` when the angle never leaves the band that far, or when it takes more
+    than :data:`BAND_REACH_S` from the band's exit to that departure (too slow for a hand's move: a settling creep or
+    a drift the line missed); the edge moves back by :data:`BAND_REACH_S` at most."""
     span = int(round(BAND_S * rate_hz))
     fit_stop = edge - min(int(round(rate_hz)), max(0, (edge - rest_first) // 2))
     lo = max(rest_first, fit_stop - span)
@@ -283,13 +288,16 @@ def _band_exit(track, rest_first: int, edge: int, moving: int, rate_hz: float) -
     beyond = np.maximum(k - (fit_stop - lo), 0.0)[:, None]
     level = np.max(np.abs(residual) / np.sqrt(band**2 + walk * beyond), axis=1)
     level[rest] = 0.0
-    far = np.flatnonzero(level >= EXIT_LEVELS * EXIT_BANDS)
+    far = np.flatnonzero(level >= EXIT_LEVELS)
     if not len(far):
         return edge
-    inside = np.flatnonzero(level[:far[0]] <= EXIT_BANDS)
+    inside = np.flatnonzero(level[:far[0]] <= 1.0)
     exit_ = int(inside[-1]) if len(inside) else fit_stop - lo
-    onset = exit_ - BACK * (far[0] - exit_) / (EXIT_LEVELS ** (1.0 / 3.0) - 1.0)
-    return min(edge, max(rest_first, edge - int(round(BAND_REACH_S * rate_hz)), lo + int(math.floor(onset))))
+    reach = BAND_REACH_S * rate_hz
+    onset = lo + exit_ - (far[0] - exit_) / (EXIT_LEVELS ** (1.0 / 3.0) - 1.0)
+    if lo + exit_ - onset > reach:  # too slow for a hand's move: a settling creep, a drift
+        return edge
+    return min(edge, max(rest_first, edge - int(round(reach)), int(math.floor(onset))))
 
 
 def _without_spins(gyro: np.ndarray, spans, quiet_gyro: np.ndarray):

@@ -218,10 +218,11 @@ def _creep_end(rates: np.ndarray, span: int) -> int:
     residual = track - design @ coef
     # at rest the angle scatters about the line (tremor, noise) and walks off it (the rate's white noise): its
     # spread is that scatter, and a random walk grown with the distance from the stretch the line was fitted on,
-    # its pace from the growth of the angle's increments with their lag (a tremor's swings add alike to every lag)
+    # its pace from the angle's increments over blocks of a quarter second (a tremor's swings cancel in them)
     scatter = np.std(residual[span:], axis=0)
     block = max(2, min(span // 4, len(track) // 8))
-    walk = _walk_pace(residual[span:], block)
+    increments = np.diff(residual[span::block], axis=0)
+    walk = np.mean(increments**2, axis=0) / block if len(increments) else np.zeros(residual.shape[1])
     spread = np.sqrt(scatter[None, :] ** 2 + walk[None, :] * (span - k[:span])[:, None])
     spread += 1e-12 * (np.max(np.abs(track), axis=0) + 1e-300)
     stray = np.flatnonzero(np.any(np.abs(residual[:span]) > CREEP_SIGMAS * spread, axis=1))

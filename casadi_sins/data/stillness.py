@@ -250,9 +250,9 @@ def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: i
         return first, stop
     if moving_before > 0:
         first = max(first, motion_end(track, stop - settle, moving_before - 1, rate_hz).safe)
-        last = len(track) - 1
-        first = max(first, last - _band_exit(track.reversed(), last - stop + settle, last - first, last - moving_before + 1,
-                                             rate_hz))
+        last = len(track) - 1  # backwards in time, boundary b is last - b
+        backwards = _band_exit(track.reversed(), last - stop + settle, last - first, last - moving_before + 1, rate_hz)
+        first = max(first, last - backwards)
     if moving_after < n:
         stop = min(stop, motion_start(track, first + settle, moving_after, rate_hz).safe)
         stop = min(stop, _band_exit(track, first + settle, stop, moving_after, rate_hz))

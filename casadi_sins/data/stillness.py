@@ -19,7 +19,9 @@ signal says nothing then; its changes do.  Every test here takes a rest's own me
    where the angle strays from that line by more than :data:`CREEP_SIGMAS` times its spread (its scatter about
    the line there, and the random walk it takes so far off); then placed at the fitted onset of the motion
    beside it (:func:`data.edges.motion_start`, :func:`~data.edges.motion_end`: the gyro-integrated angle
-   departs from the rest's line, which takes any offset; the slow start of a move shows there first).
+   departs from the rest's line, which takes any offset; the slow start of a move shows there first); and at
+   the latest where that angle, traced back along a minimum-jerk start, left the rest's tremor band
+   (:func:`_band_exit`: a trembling hand hides the first tenths of a degree of a move from the onset fit).
 5. **A rest is a rest.**  A stretch quiet by its changes may still turn at a constant rate (a slow spin
    about the vertical): its mean gyro rate then stands off the others.  Rests whose mean rate differs from
    the median of all rests by more than :data:`RATE_OUTLIER` times the rests' spread are taken for motion.
@@ -61,6 +63,12 @@ CREEP_PASSES = 8
 #: (and by more than :data:`RATE_OUTLIER_FLOOR` of the rests' quiet deviation) turns: it is motion.
 RATE_OUTLIER = 10.0
 RATE_OUTLIER_FLOOR = 1.0
+#: Seconds of rest whose gyro-integrated angle sets its tremor band; the departure (in bands) whose time after the
+#: band's exit fixes a move's onset; the longest a hand's move may take from the band to that departure, traced back
+#: (s): a slower departure is a settling creep or a drift, left to the creep test and the onset fit.
+BAND_S = 2.0
+EXIT_LEVELS = 8.0
+BAND_REACH_S = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -221,18 +229,76 @@ def _creep_end(rates: np.ndarray, span: int) -> int:
     return int(stray[-1]) + 1 if len(stray) else 0
 
 
+def _walk_pace(angle: np.ndarray, lag: int) -> np.ndarray:
+    """The pace (variance per sample, per column) of the random walk in ``angle`` (rows in time): the mean square of
+    its increments grows by the pace times the lag, while a tremor's swings and white noise add the same to every
+    lag, so the difference between the increments over ``2 lag`` and over ``lag`` holds the walk alone."""
+    if len(angle) <= 2 * lag:
+        return np.zeros(angle.shape[1])
+    short = np.mean((angle[lag:] - angle[:-lag]) ** 2, axis=0)
+    long = np.mean((angle[2 * lag:] - angle[:-2 * lag]) ** 2, axis=0)
+    return np.maximum(long - short, 0.0) / lag
+
+
 def _at_onsets(track, first: int, stop: int, moving_before: int, moving_after: int, n: int, rate_hz: float):
     """A rest's edges at the fitted onsets of the motion beside it (:mod:`data.edges`: the gyro-integrated angle
     departs from the rest's line, far more sensitive than any moving statistic to the slow start of a move), on
-    the rest's safe side; an edge of the recording stays."""
+    the rest's safe side, and no later than where the move left the rest's tremor band (:func:`_band_exit`, the
+    end of a move as the start of one backwards in time); an edge of the recording stays."""
     settle = min(int(round(rate_hz)), (stop - first) // 4)
     if settle < 1:
         return first, stop
     if moving_before > 0:
         first = max(first, motion_end(track, stop - settle, moving_before - 1, rate_hz).safe)
+        last = len(track) - 1  # backwards in time, boundary b is last - b
+        backwards = _band_exit(track.reversed(), last - stop + settle, last - first, last - moving_before + 1, rate_hz)
+        first = max(first, last - backwards)
     if moving_after < n:
         stop = min(stop, motion_start(track, first + settle, moving_after, rate_hz).safe)
+        stop = min(stop, _band_exit(track, first + settle, stop, moving_after, rate_hz))
     return first, max(first, stop)
+
+
+def _band_exit(track, rest_first: int, edge: int, moving: int, rate_hz: float) -> int:
+    """The last boundary a rest ending at ``edge`` may reach before the motion surely seen at ``moving`` (indices of
+    ``track``, rest first): where the motion's angle, extrapolated back through the rest's tremor band, began.
+
+    The rest's angle follows a line within a band (tremor, noise: the largest residual per axis over
+    :data:`BAND_S` before ``edge`` less a settling second); a hand's move leaves it slowly, like ``(t - t0)^3`` at
+    the slowest (minimum jerk), its first tenths of a degree hidden in the band.  Where the angle leaves the band
+    for good (``te``) and where it first reaches :data:`EXIT_LEVELS` bands (``t8``) fix the onset of that law:
+    ``t0 = te - (t8 - te) / (EXIT_LEVELS^(1/3) - 1)``; a faster start (a turn at finite acceleration, a wobble)
+    began later, so ``t0`` is on the rest's side.  The band widens beyond the fitted stretch by the random walk it
+    measured (:func:`_walk_pace`).  ``edge`` when the angle never leaves the band that far, or when it takes more
+    than :data:`BAND_REACH_S` from the band's exit to that departure (too slow for a hand's move: a settling creep or
+    a drift the line missed); the edge moves back by :data:`BAND_REACH_S` at most."""
+    span = int(round(BAND_S * rate_hz))
+    fit_stop = edge - min(int(round(rate_hz)), max(0, (edge - rest_first) // 2))
+    lo = max(rest_first, fit_stop - span)
+    hi = min(len(track) - 1, moving + int(round(rate_hz)))
+    if fit_stop - lo < MIN_CREEP_SAMPLES or hi <= fit_stop:
+        return edge
+    y = track.window(lo, hi)
+    k = np.arange(len(y), dtype=float)
+    rest = slice(0, fit_stop - lo + 1)
+    coef = np.polynomial.polynomial.polyfit(k[rest], y[rest], 1)
+    residual = y - np.polynomial.polynomial.polyval(k, coef).T
+    band = np.max(np.abs(residual[rest]), axis=0)
+    band = np.maximum(band, 1e-12 * (np.max(np.abs(y), axis=0) + 1e-300))
+    walk = _walk_pace(residual[rest], max(2, (fit_stop - lo) // 8))
+    beyond = np.maximum(k - (fit_stop - lo), 0.0)[:, None]
+    level = np.max(np.abs(residual) / np.sqrt(band**2 + walk * beyond), axis=1)
+    level[rest] = 0.0
+    far = np.flatnonzero(level >= EXIT_LEVELS)
+    if not len(far):
+        return edge
+    inside = np.flatnonzero(level[:far[0]] <= 1.0)
+    exit_ = int(inside[-1]) if len(inside) else fit_stop - lo
+    reach = BAND_REACH_S * rate_hz
+    onset = lo + exit_ - (far[0] - exit_) / (EXIT_LEVELS ** (1.0 / 3.0) - 1.0)
+    if lo + exit_ - onset > reach:  # too slow for a hand's move: a settling creep, a drift
+        return edge
+    return min(edge, max(rest_first, edge - int(round(reach)), int(math.floor(onset))))
 
 
 def _without_spins(gyro: np.ndarray, spans, quiet_gyro: np.ndarray):

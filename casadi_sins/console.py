@@ -28,8 +28,7 @@ def run(argv: list[str] | None = None) -> int:
         status = signals.exit_status(exc)
         if status is None:
             raise
-        print("terminated" if status == signals.TERMINATED else "interrupted", file=sys.stderr)
-        return status
+        return signals.told(status)
     return main(argv)
 
 
@@ -42,7 +41,7 @@ def console() -> None:
         status = signals.exit_status(exc)
         if status is None:
             raise
-        print("terminated" if status == signals.TERMINATED else "interrupted", file=sys.stderr)
+        signals.told(status)
     signals.ignore_all()
     _forget_handled_interrupt()
     sys.exit(status)

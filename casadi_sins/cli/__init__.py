@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import sys
 import traceback
 import warnings
@@ -134,19 +133,15 @@ def main(argv: list[str] | None = None) -> int:
 def _outcome(name: str, exc: BaseException) -> int:
     """The exit status of a command that raised ``exc`` (and its one line on standard error)."""
     if signals.received() and not isinstance(exc, (KeyboardInterrupt, SystemExit)):  # a signal turned into another error
-        exc = Terminated() if signals.received() != signal.SIGINT else KeyboardInterrupt()
+        exc = signals.interruption()
     calibration = sys.modules.get("casadi_sins.calibrate.result")  # loaded by the commands that calibrate
     told = (InputError, OutputError, CliError, *((calibration.CalibrationError,) if calibration else ()))
     try:
         raise exc
     except told as exc:
         return _fail(name, one_line(exc, 2000))
-    except Terminated:
-        print("terminated", file=sys.stderr)
-        return signals.TERMINATED
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return signals.INTERRUPTED
+    except KeyboardInterrupt as exc:  # Ctrl-C, and SIGTERM or SIGHUP (Terminated)
+        return signals.told(signals.TERMINATED if isinstance(exc, Terminated) else signals.INTERRUPTED)
     except MemoryError:
         last = last_input()
         return _fail(name, f"not enough memory{f' (last input read: {one_line(last, 300)})' if last else ''}: free "

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 
 #: Exit status of a command ended by Ctrl-C, and by SIGTERM or SIGHUP (128 + SIGINT, 128 + SIGTERM).
@@ -78,12 +79,20 @@ def installed() -> bool:
             and signal.getsignal(signal.SIGTERM) is _handler)
 
 
+def interruption() -> KeyboardInterrupt | None:
+    """The exception the signal received so far raises (:class:`Terminated` or KeyboardInterrupt; None: none)."""
+    if not _received:
+        return None
+    return KeyboardInterrupt() if _received == signal.SIGINT else Terminated(signal.Signals(_received).name)
+
+
 def raise_if_received() -> None:
-    """Raise what a signal received so far raises (:class:`Terminated` or KeyboardInterrupt), even when the
-    exception it raised was swallowed on the way (a library's ``except:`` around an import, C code that
-    clears the error): a command that was asked to stop never writes its outputs."""
-    if _received:
-        raise Terminated(signal.Signals(_received).name) if _received != signal.SIGINT else KeyboardInterrupt
+    """Raise :func:`interruption`, even when the exception the signal raised was swallowed on the way (a
+    library's ``except:`` around an import, C code that clears the error): a command that was asked to stop
+    never writes its outputs."""
+    exc = interruption()
+    if exc is not None:
+        raise exc
 
 
 def restore(previous: dict) -> None:
@@ -99,6 +108,12 @@ def ignore_all() -> None:
         signal.signal(sig, signal.SIG_IGN)
 
 
+def told(status: int) -> int:
+    """Print the one line of a command ended by a signal (``interrupted`` or ``terminated``); returns ``status``."""
+    print("terminated" if status == TERMINATED else "interrupted", file=sys.stderr)
+    return status
+
+
 def exit_status(exc: BaseException) -> int | None:
     """130 or 143 when ``exc`` (or a signal received meanwhile) ends the command, else ``None``."""
     if isinstance(exc, Terminated) or _received in (signal.SIGTERM, signal.SIGHUP):
@@ -107,12 +122,10 @@ def exit_status(exc: BaseException) -> int | None:
         return INTERRUPTED
     return None
 
-#: The signals held by :func:`signals_held`: those a command ends on.
-HELD = HANDLED
 
 
 def hold_signals():
-    """Start holding :data:`HELD` (the main thread only; elsewhere nothing); returns what
+    """Start holding :data:`HANDLED` (the main thread only; elsewhere nothing); returns what
     :func:`release_signals` needs."""
     if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         return None
@@ -121,8 +134,8 @@ def hold_signals():
     def record(signum, frame):
         received.append(signum)
 
-    handlers = {sig: signal.signal(sig, record) for sig in HELD}
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, HELD)
+    handlers = {sig: signal.signal(sig, record) for sig in HANDLED}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, HANDLED)
     return mask, handlers, received
 
 
